@@ -1,0 +1,596 @@
+#include "io/Hdf5File.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <sstream>
+#include <system_error>
+
+#include "core/Error.hpp"
+
+namespace fountain::io::hdf5 {
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "Vec3 must be three packed doubles");
+
+namespace {
+
+herr_t collect_innermost(unsigned /*n*/, const H5E_error2_t* err, void* client) {
+  // Walking downward, the last entry visited is the innermost (the root cause).
+  auto* out = static_cast<std::string*>(client);
+  if (err != nullptr && err->desc != nullptr && err->desc[0] != '\0') *out = err->desc;
+  return 0;
+}
+
+// A link-creation property list that creates missing intermediate groups.
+Id intermediate_groups_lcpl() {
+  Id lcpl(H5Pcreate(H5P_LINK_CREATE), H5Pclose);
+  if (lcpl.valid()) H5Pset_create_intermediate_group(lcpl.get(), 1);
+  return lcpl;
+}
+
+// A fixed-length, null-terminated C string type able to hold `length` characters.
+Id fixed_string_type(std::size_t length) {
+  Id type(H5Tcopy(H5T_C_S1), H5Tclose);
+  if (!type.valid()) return type;
+  if (H5Tset_size(type.get(), length + 1) < 0 || H5Tset_strpad(type.get(), H5T_STR_NULLTERM) < 0)
+    return Id();
+  return type;
+}
+
+std::string describe_class(H5T_class_t c) {
+  switch (c) {
+    case H5T_INTEGER: return "integer";
+    case H5T_FLOAT: return "floating-point";
+    case H5T_STRING: return "string";
+    case H5T_COMPOUND: return "compound";
+    case H5T_ARRAY: return "array";
+    case H5T_ENUM: return "enum";
+    case H5T_VLEN: return "variable-length";
+    case H5T_BITFIELD: return "bitfield";
+    case H5T_OPAQUE: return "opaque";
+    case H5T_REFERENCE: return "reference";
+    default: return "unknown";
+  }
+}
+
+// Reads one string from a dataset or attribute whose file type is `file_type`;
+// `read(memory_type, buffer)` does the H5Dread/H5Aread.
+template <class ReadFn>
+bool read_single_string(hid_t file_type, ReadFn read, std::string& out) {
+  if (H5Tis_variable_str(file_type) > 0) {
+    Id memory_type(H5Tcopy(H5T_C_S1), H5Tclose);
+    if (!memory_type.valid() || H5Tset_size(memory_type.get(), H5T_VARIABLE) < 0) return false;
+    char* text = nullptr;
+    if (read(memory_type.get(), static_cast<void*>(&text)) < 0) return false;
+    out = text != nullptr ? std::string(text) : std::string();
+    if (text != nullptr) H5free_memory(text);
+    return true;
+  }
+  const std::size_t size = H5Tget_size(file_type);
+  if (size == 0) return false;
+  Id memory_type(H5Tcopy(H5T_C_S1), H5Tclose);
+  if (!memory_type.valid() || H5Tset_size(memory_type.get(), size + 1) < 0 ||
+      H5Tset_strpad(memory_type.get(), H5T_STR_NULLTERM) < 0)
+    return false;
+  std::vector<char> buffer(size + 1, '\0');
+  if (read(memory_type.get(), static_cast<void*>(buffer.data())) < 0) return false;
+  out.assign(buffer.data());  // up to the first null
+  while (!out.empty() && out.back() == ' ') out.pop_back();  // Fortran-style space padding
+  return true;
+}
+
+std::string join_path(const std::string& object, const std::string& name) {
+  return object == "/" ? "/" + name : object + "/" + name;
+}
+
+}  // namespace
+
+void silence_hdf5_errors() {
+  static const bool done = [] {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    return true;
+  }();
+  (void)done;
+}
+
+std::string hdf5_error_detail() {
+  std::string detail;
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collect_innermost, &detail);
+  H5Eclear2(H5E_DEFAULT);
+  return detail;
+}
+
+bool is_hdf5(const std::string& path) {
+  silence_hdf5_errors();
+  const htri_t r = H5Fis_hdf5(path.c_str());
+  H5Eclear2(H5E_DEFAULT);
+  return r > 0;
+}
+
+// ---------------------------------------------------------------------------------------
+
+File::File(const std::string& path, Mode mode) : path_(path) {
+  silence_hdf5_errors();
+  H5Eclear2(H5E_DEFAULT);
+  if (mode == Mode::read) {
+    file_ = Id(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    if (!file_.valid()) fail("", "cannot open as an HDF5 file (damaged or truncated?)");
+  } else {
+    file_ = Id(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose);
+    if (!file_.valid()) fail("", "cannot create the HDF5 file");
+  }
+}
+
+void File::close() {
+  if (!file_.valid()) return;
+  const herr_t flushed = H5Fflush(file_.get(), H5F_SCOPE_GLOBAL);
+  const herr_t closed = file_.close();
+  if (flushed < 0 || closed < 0) fail("", "cannot write the file to disk (disk full?)");
+}
+
+void File::fail(const std::string& object, const std::string& what) const {
+  std::string message = path_ + ": ";
+  if (!object.empty()) message += object + ": ";
+  message += what;
+  const std::string detail = hdf5_error_detail();
+  if (!detail.empty()) message += " (HDF5: " + detail + ")";
+  throw InputError(message);
+}
+
+bool File::exists(const std::string& object) const {
+  if (object.empty() || object == "/") return true;
+  std::size_t pos = object[0] == '/' ? 1 : 0;
+  while (true) {
+    const std::size_t slash = object.find('/', pos);
+    const std::string prefix = object.substr(0, slash);
+    if (!prefix.empty() && prefix != "/") {
+      const htri_t r = H5Lexists(file_.get(), prefix.c_str(), H5P_DEFAULT);
+      if (r <= 0) {
+        H5Eclear2(H5E_DEFAULT);
+        return false;
+      }
+    }
+    if (slash == std::string::npos) break;
+    pos = slash + 1;
+  }
+  const htri_t r = H5Oexists_by_name(file_.get(), object.c_str(), H5P_DEFAULT);
+  H5Eclear2(H5E_DEFAULT);
+  return r > 0;
+}
+
+bool File::has_attribute(const std::string& object, const std::string& name) const {
+  if (!exists(object)) return false;
+  const htri_t r = H5Aexists_by_name(file_.get(), object.c_str(), name.c_str(), H5P_DEFAULT);
+  H5Eclear2(H5E_DEFAULT);
+  return r > 0;
+}
+
+Id File::open_object(const std::string& object) const {
+  if (!exists(object)) fail(object, "not found");
+  Id id(H5Oopen(file_.get(), object.c_str(), H5P_DEFAULT), H5Oclose);
+  if (!id.valid()) fail(object, "cannot open");
+  return id;
+}
+
+Id File::open_dataset(const std::string& dataset) const {
+  if (!exists(dataset)) fail(dataset, "dataset not found");
+  Id id(H5Dopen2(file_.get(), dataset.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!id.valid()) fail(dataset, "cannot open as a dataset");
+  return id;
+}
+
+Id File::open_attribute(const std::string& object, const std::string& name) const {
+  if (!exists(object)) fail(object, "not found (looking for attribute " + name + ")");
+  if (!has_attribute(object, name)) fail(object, "attribute " + name + " not found");
+  Id id(H5Aopen_by_name(file_.get(), object.c_str(), name.c_str(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose);
+  if (!id.valid()) fail(join_path(object, name), "cannot open attribute");
+  return id;
+}
+
+DatasetInfo File::dataset_info(const std::string& dataset) const {
+  Id ds = open_dataset(dataset);
+  Id space(H5Dget_space(ds.get()), H5Sclose);
+  Id type(H5Dget_type(ds.get()), H5Tclose);
+  if (!space.valid() || !type.valid()) fail(dataset, "cannot read shape or type");
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank < 0) fail(dataset, "cannot read shape");
+  std::vector<hsize_t> dims(static_cast<std::size_t>(rank));
+  if (rank > 0 && H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr) < 0)
+    fail(dataset, "cannot read shape");
+  DatasetInfo info;
+  info.dims.assign(dims.begin(), dims.end());
+  info.type_class = H5Tget_class(type.get());
+  info.type_size = H5Tget_size(type.get());
+  info.is_signed = info.type_class == H5T_INTEGER && H5Tget_sign(type.get()) == H5T_SGN_2;
+  return info;
+}
+
+// --- Reading datasets ------------------------------------------------------------------
+
+std::vector<double> File::read_doubles(const std::string& dataset) const {
+  const DatasetInfo info = dataset_info(dataset);
+  if (info.type_class != H5T_FLOAT && info.type_class != H5T_INTEGER)
+    fail(dataset, "holds " + describe_class(info.type_class) + " data, expected numbers");
+  Id ds = open_dataset(dataset);
+  Id space(H5Dget_space(ds.get()), H5Sclose);
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0) fail(dataset, "cannot read size");
+  std::vector<double> values(static_cast<std::size_t>(n));
+  if (n > 0 && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
+    fail(dataset, "cannot read data (damaged or truncated file?)");
+  return values;
+}
+
+std::vector<Vec3> File::read_vec3(const std::string& dataset) const {
+  const DatasetInfo info = dataset_info(dataset);
+  if (info.dims.size() != 2 || info.dims[1] != 3) {
+    std::ostringstream shape;
+    for (std::size_t d = 0; d < info.dims.size(); ++d) shape << (d ? " x " : "") << info.dims[d];
+    fail(dataset, "has shape (" + shape.str() + "), expected N x 3");
+  }
+  const std::vector<double> flat = read_doubles(dataset);
+  std::vector<Vec3> out(flat.size() / 3);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
+  return out;
+}
+
+std::vector<std::uint64_t> File::read_uint64(const std::string& dataset) const {
+  const DatasetInfo info = dataset_info(dataset);
+  if (info.type_class != H5T_INTEGER)
+    fail(dataset, "holds " + describe_class(info.type_class) + " data, expected integers");
+  Id ds = open_dataset(dataset);
+  Id space(H5Dget_space(ds.get()), H5Sclose);
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0) fail(dataset, "cannot read size");
+  std::vector<std::uint64_t> out(static_cast<std::size_t>(n));
+  if (n == 0) return out;
+  if (info.is_signed) {
+    std::vector<std::int64_t> tmp(out.size());
+    if (H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, tmp.data()) < 0)
+      fail(dataset, "cannot read data (damaged or truncated file?)");
+    for (std::size_t i = 0; i < tmp.size(); ++i) {
+      if (tmp[i] < 0)
+        fail(dataset, "entry " + std::to_string(i) + " is " + std::to_string(tmp[i]) + " (must be non-negative)");
+      out[i] = static_cast<std::uint64_t>(tmp[i]);
+    }
+  } else if (H5Dread(ds.get(), H5T_NATIVE_UINT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0) {
+    fail(dataset, "cannot read data (damaged or truncated file?)");
+  }
+  return out;
+}
+
+std::string File::read_string(const std::string& dataset) const {
+  Id ds = open_dataset(dataset);
+  Id type(H5Dget_type(ds.get()), H5Tclose);
+  if (!type.valid() || H5Tget_class(type.get()) != H5T_STRING) fail(dataset, "is not a string dataset");
+  std::string out;
+  const bool ok = read_single_string(type.get(), [&](hid_t memory_type, void* buffer) {
+    return H5Dread(ds.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buffer);
+  }, out);
+  if (!ok) fail(dataset, "cannot read string");
+  return out;
+}
+
+// --- Reading attributes ----------------------------------------------------------------
+
+namespace {
+struct AttributeShape {
+  Id type;
+  H5T_class_t type_class = H5T_NO_CLASS;
+  bool is_signed = false;
+  std::size_t count = 0;
+};
+
+AttributeShape attribute_shape(const File& file, hid_t attr, const std::string& where) {
+  AttributeShape s;
+  s.type = Id(H5Aget_type(attr), H5Tclose);
+  Id space(H5Aget_space(attr), H5Sclose);
+  if (!s.type.valid() || !space.valid()) file.fail(where, "cannot read type or shape");
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0) file.fail(where, "cannot read shape");
+  s.type_class = H5Tget_class(s.type.get());
+  s.is_signed = s.type_class == H5T_INTEGER && H5Tget_sign(s.type.get()) == H5T_SGN_2;
+  s.count = static_cast<std::size_t>(n);
+  return s;
+}
+}  // namespace
+
+std::vector<double> File::read_attribute_doubles(const std::string& object, const std::string& name) const {
+  Id attr = open_attribute(object, name);
+  const std::string where = join_path(object, name);
+  const AttributeShape shape = attribute_shape(*this, attr.get(), where);
+  if (shape.type_class != H5T_FLOAT && shape.type_class != H5T_INTEGER)
+    fail(where, "holds " + describe_class(shape.type_class) + " data, expected numbers");
+  std::vector<double> values(shape.count);
+  if (shape.count > 0 && H5Aread(attr.get(), H5T_NATIVE_DOUBLE, values.data()) < 0) fail(where, "cannot read");
+  return values;
+}
+
+double File::read_attribute_double(const std::string& object, const std::string& name) const {
+  const std::vector<double> v = read_attribute_doubles(object, name);
+  if (v.size() != 1)
+    fail(join_path(object, name), "has " + std::to_string(v.size()) + " values, expected one");
+  return v[0];
+}
+
+std::vector<std::uint64_t> File::read_attribute_uint64(const std::string& object, const std::string& name) const {
+  Id attr = open_attribute(object, name);
+  const std::string where = join_path(object, name);
+  const AttributeShape shape = attribute_shape(*this, attr.get(), where);
+  std::vector<std::uint64_t> out(shape.count);
+  if (shape.count == 0) return out;
+  if (shape.type_class == H5T_INTEGER && !shape.is_signed) {
+    if (H5Aread(attr.get(), H5T_NATIVE_UINT64, out.data()) < 0) fail(where, "cannot read");
+  } else if (shape.type_class == H5T_INTEGER) {
+    std::vector<std::int64_t> tmp(shape.count);
+    if (H5Aread(attr.get(), H5T_NATIVE_INT64, tmp.data()) < 0) fail(where, "cannot read");
+    for (std::size_t i = 0; i < tmp.size(); ++i) {
+      if (tmp[i] < 0)
+        fail(where, "entry " + std::to_string(i) + " is " + std::to_string(tmp[i]) + " (must be non-negative)");
+      out[i] = static_cast<std::uint64_t>(tmp[i]);
+    }
+  } else if (shape.type_class == H5T_FLOAT) {
+    const std::vector<double> tmp = read_attribute_doubles(object, name);
+    for (std::size_t i = 0; i < tmp.size(); ++i) {
+      if (!(tmp[i] >= 0.0) || tmp[i] != std::floor(tmp[i]) || tmp[i] >= 18446744073709551616.0) {
+        std::ostringstream s;
+        s << "entry " << i << " is " << tmp[i] << " (must be a non-negative whole number)";
+        fail(where, s.str());
+      }
+      out[i] = static_cast<std::uint64_t>(tmp[i]);
+    }
+  } else {
+    fail(where, "holds " + describe_class(shape.type_class) + " data, expected integers");
+  }
+  return out;
+}
+
+std::vector<std::int64_t> File::read_attribute_int64(const std::string& object, const std::string& name) const {
+  Id attr = open_attribute(object, name);
+  const std::string where = join_path(object, name);
+  const AttributeShape shape = attribute_shape(*this, attr.get(), where);
+  std::vector<std::int64_t> out(shape.count);
+  if (shape.count == 0) return out;
+  if (shape.type_class == H5T_INTEGER && shape.is_signed) {
+    if (H5Aread(attr.get(), H5T_NATIVE_INT64, out.data()) < 0) fail(where, "cannot read");
+  } else if (shape.type_class == H5T_INTEGER) {
+    std::vector<std::uint64_t> tmp(shape.count);
+    if (H5Aread(attr.get(), H5T_NATIVE_UINT64, tmp.data()) < 0) fail(where, "cannot read");
+    for (std::size_t i = 0; i < tmp.size(); ++i) {
+      if (tmp[i] > static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))
+        fail(where, "entry " + std::to_string(i) + " is too large");
+      out[i] = static_cast<std::int64_t>(tmp[i]);
+    }
+  } else if (shape.type_class == H5T_FLOAT) {
+    const std::vector<double> tmp = read_attribute_doubles(object, name);
+    for (std::size_t i = 0; i < tmp.size(); ++i) {
+      if (!std::isfinite(tmp[i]) || tmp[i] != std::floor(tmp[i]) || std::fabs(tmp[i]) >= 9.2e18) {
+        std::ostringstream s;
+        s << "entry " << i << " is " << tmp[i] << " (must be a whole number)";
+        fail(where, s.str());
+      }
+      out[i] = static_cast<std::int64_t>(tmp[i]);
+    }
+  } else {
+    fail(where, "holds " + describe_class(shape.type_class) + " data, expected integers");
+  }
+  return out;
+}
+
+std::string File::read_attribute_string(const std::string& object, const std::string& name) const {
+  Id attr = open_attribute(object, name);
+  const std::string where = join_path(object, name);
+  const AttributeShape shape = attribute_shape(*this, attr.get(), where);
+  if (shape.type_class != H5T_STRING) fail(where, "is not a string");
+  if (shape.count != 1) fail(where, "holds " + std::to_string(shape.count) + " strings, expected one");
+  std::string out;
+  const bool ok = read_single_string(shape.type.get(), [&](hid_t memory_type, void* buffer) {
+    return H5Aread(attr.get(), memory_type, buffer);
+  }, out);
+  if (!ok) fail(where, "cannot read string");
+  return out;
+}
+
+// --- Writing -----------------------------------------------------------------------------
+
+void File::create_group(const std::string& group) {
+  if (exists(group)) return;
+  Id lcpl = intermediate_groups_lcpl();
+  Id g(H5Gcreate2(file_.get(), group.c_str(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
+  if (!g.valid()) fail(group, "cannot create group");
+}
+
+void File::write_numeric_dataset(const std::string& dataset, hid_t file_type, hid_t memory_type,
+                                 const std::vector<hsize_t>& dims, const void* data,
+                                 const StringAttributes& attributes) {
+  {
+    Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+    if (!space.valid()) fail(dataset, "cannot create dataspace");
+    Id lcpl = intermediate_groups_lcpl();
+    Id ds(H5Dcreate2(file_.get(), dataset.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+          H5Dclose);
+    if (!ds.valid()) fail(dataset, "cannot create dataset");
+    const bool empty = std::any_of(dims.begin(), dims.end(), [](hsize_t d) { return d == 0; });
+    if (!empty && H5Dwrite(ds.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
+      fail(dataset, "cannot write data (disk full?)");
+    if (ds.close() < 0) fail(dataset, "cannot close dataset (disk full?)");
+  }
+  for (const auto& [name, value] : attributes) write_attribute(dataset, name, value);
+}
+
+void File::write_dataset(const std::string& dataset, const std::vector<double>& values,
+                         const StringAttributes& attributes) {
+  write_numeric_dataset(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {values.size()}, values.data(), attributes);
+}
+
+void File::write_dataset(const std::string& dataset, const std::vector<Vec3>& values,
+                         const StringAttributes& attributes) {
+  write_numeric_dataset(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {values.size(), 3}, values.data(), attributes);
+}
+
+void File::write_dataset(const std::string& dataset, const std::vector<std::uint64_t>& values,
+                         const StringAttributes& attributes) {
+  write_numeric_dataset(dataset, H5T_STD_U64LE, H5T_NATIVE_UINT64, {values.size()}, values.data(), attributes);
+}
+
+void File::write_dataset(const std::string& dataset, const std::vector<std::int32_t>& values,
+                         const StringAttributes& attributes) {
+  write_numeric_dataset(dataset, H5T_STD_I32LE, H5T_NATIVE_INT32, {values.size()}, values.data(), attributes);
+}
+
+void File::write_string_dataset(const std::string& dataset, const std::string& text) {
+  Id type = fixed_string_type(text.size());
+  if (!type.valid()) fail(dataset, "cannot create string type");
+  Id space(H5Screate(H5S_SCALAR), H5Sclose);
+  Id lcpl = intermediate_groups_lcpl();
+  Id ds(H5Dcreate2(file_.get(), dataset.c_str(), type.get(), space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+        H5Dclose);
+  if (!ds.valid()) fail(dataset, "cannot create dataset");
+  if (H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, text.c_str()) < 0)
+    fail(dataset, "cannot write data (disk full?)");
+  if (ds.close() < 0) fail(dataset, "cannot close dataset (disk full?)");
+}
+
+void File::write_numeric_attribute(const std::string& object, const std::string& name, hid_t file_type,
+                                   hid_t memory_type, const std::vector<hsize_t>& dims, const void* data) {
+  const std::string where = join_path(object, name);
+  if (!exists(object)) fail(object, "not found (writing attribute " + name + ")");
+  if (has_attribute(object, name) && H5Adelete_by_name(file_.get(), object.c_str(), name.c_str(), H5P_DEFAULT) < 0)
+    fail(where, "cannot replace attribute");
+  Id space = dims.empty() ? Id(H5Screate(H5S_SCALAR), H5Sclose)
+                          : Id(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  if (!space.valid()) fail(where, "cannot create dataspace");
+  Id attr(H5Acreate_by_name(file_.get(), object.c_str(), name.c_str(), file_type, space.get(), H5P_DEFAULT,
+                            H5P_DEFAULT, H5P_DEFAULT),
+          H5Aclose);
+  if (!attr.valid()) fail(where, "cannot create attribute");
+  const bool empty = std::any_of(dims.begin(), dims.end(), [](hsize_t d) { return d == 0; });
+  if (!empty && H5Awrite(attr.get(), memory_type, data) < 0) fail(where, "cannot write attribute");
+}
+
+void File::write_attribute(const std::string& object, const std::string& name, double value) {
+  write_numeric_attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {}, &value);
+}
+
+void File::write_attribute(const std::string& object, const std::string& name, int value) {
+  const std::int32_t v = value;
+  write_numeric_attribute(object, name, H5T_STD_I32LE, H5T_NATIVE_INT32, {}, &v);
+}
+
+void File::write_attribute(const std::string& object, const std::string& name, std::int64_t value) {
+  write_numeric_attribute(object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, {}, &value);
+}
+
+void File::write_attribute(const std::string& object, const std::string& name, const std::string& value) {
+  const std::string where = join_path(object, name);
+  if (!exists(object)) fail(object, "not found (writing attribute " + name + ")");
+  if (has_attribute(object, name) && H5Adelete_by_name(file_.get(), object.c_str(), name.c_str(), H5P_DEFAULT) < 0)
+    fail(where, "cannot replace attribute");
+  Id type = fixed_string_type(value.size());
+  if (!type.valid()) fail(where, "cannot create string type");
+  Id space(H5Screate(H5S_SCALAR), H5Sclose);
+  Id attr(H5Acreate_by_name(file_.get(), object.c_str(), name.c_str(), type.get(), space.get(), H5P_DEFAULT,
+                            H5P_DEFAULT, H5P_DEFAULT),
+          H5Aclose);
+  if (!attr.valid()) fail(where, "cannot create attribute");
+  if (H5Awrite(attr.get(), type.get(), value.c_str()) < 0) fail(where, "cannot write attribute");
+}
+
+void File::write_attribute(const std::string& object, const std::string& name, const std::vector<double>& values) {
+  write_numeric_attribute(object, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {values.size()}, values.data());
+}
+
+void File::write_attribute(const std::string& object, const std::string& name,
+                           const std::vector<std::int32_t>& values) {
+  write_numeric_attribute(object, name, H5T_STD_I32LE, H5T_NATIVE_INT32, {values.size()}, values.data());
+}
+
+void File::write_attribute(const std::string& object, const std::string& name,
+                           const std::vector<std::uint32_t>& values) {
+  write_numeric_attribute(object, name, H5T_STD_U32LE, H5T_NATIVE_UINT32, {values.size()}, values.data());
+}
+
+void File::write_attribute(const std::string& object, const std::string& name,
+                           const std::vector<std::int64_t>& values) {
+  write_numeric_attribute(object, name, H5T_STD_I64LE, H5T_NATIVE_INT64, {values.size()}, values.data());
+}
+
+void File::write_attribute(const std::string& object, const std::string& name,
+                           const std::vector<std::uint64_t>& values) {
+  write_numeric_attribute(object, name, H5T_STD_U64LE, H5T_NATIVE_UINT64, {values.size()}, values.data());
+}
+
+// --- Helpers shared by the GADGET/SWIFT-layout writers ---------------------------------------
+
+void write_file_atomically(const std::string& path, const std::string& what,
+                           const std::function<void(File&)>& fill) {
+  namespace fs = std::filesystem;
+  const std::string prefix = "cannot create " + what + " " + path + ": ";
+  if (path.empty()) throw InputError("cannot create " + what + ": empty file name");
+  std::error_code ec;
+  fs::path parent = fs::path(path).parent_path();
+  if (parent.empty()) parent = ".";
+  if (!fs::exists(parent, ec)) throw InputError(prefix + "folder " + parent.string() + " does not exist");
+  if (!fs::is_directory(parent, ec)) throw InputError(prefix + parent.string() + " is not a folder");
+  if (::access(parent.c_str(), W_OK | X_OK) != 0)
+    throw InputError(prefix + "folder " + parent.string() + " is not writable");
+  if (fs::is_directory(path, ec)) throw InputError(prefix + "a folder of that name exists");
+
+  const std::string tmp = path + ".tmp";
+  std::string reason;
+  try {
+    File file(tmp, File::Mode::create);
+    fill(file);
+    file.close();
+  } catch (const std::exception& e) {
+    reason = e.what();
+    if (reason.empty()) reason = "unknown error";
+  }
+  if (reason.empty()) {
+    fs::rename(tmp, path, ec);
+    if (ec) reason = "cannot rename " + tmp + " to " + path + ": " + ec.message();
+  }
+  if (!reason.empty()) {
+    fs::remove(tmp, ec);
+    // Messages from File start with the temporary file's name; the prefix already says it.
+    if (reason.rfind(tmp + ": ", 0) == 0) reason = reason.substr(tmp.size() + 2);
+    throw InputError(prefix + reason);
+  }
+}
+
+void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time) {
+  file.create_group("/Header");
+  const std::string h = "/Header";
+  constexpr std::uint64_t two32 = std::uint64_t{1} << 32;
+  if (n_gas < two32) {
+    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas), 0, 0, 0, 0, 0});
+  } else {
+    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>{n_gas, 0, 0, 0, 0, 0});
+  }
+  file.write_attribute(h, "NumPart_Total",
+                       std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas % two32), 0, 0, 0, 0, 0});
+  file.write_attribute(h, "NumPart_Total_HighWord",
+                       std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas / two32), 0, 0, 0, 0, 0});
+  file.write_attribute(h, "MassTable", std::vector<double>(6, 0.0));
+  file.write_attribute(h, "Time", time);
+  file.write_attribute(h, "Redshift", 0.0);
+  if (box_size.size() == 1) {
+    file.write_attribute(h, "BoxSize", box_size[0]);
+  } else {
+    file.write_attribute(h, "BoxSize", box_size);
+  }
+  file.write_attribute(h, "NumFilesPerSnapshot", 1);
+  file.write_attribute(h, "Dimension", 3);
+  file.write_attribute(h, "Omega0", 0.0);
+  file.write_attribute(h, "OmegaLambda", 0.0);
+  file.write_attribute(h, "HubbleParam", 1.0);
+  for (const char* flag : {"Flag_Sfr", "Flag_Cooling", "Flag_Feedback", "Flag_StellarAge", "Flag_Metals",
+                           "Flag_Entropy_ICs"})
+    file.write_attribute(h, flag, 0);
+  file.write_attribute(h, "Flag_DoublePrecision", 1);
+}
+
+}  // namespace fountain::io::hdf5

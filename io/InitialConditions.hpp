@@ -1,0 +1,28 @@
+// Reading and writing gas initial conditions in the GADGET HDF5 layout.
+#pragma once
+#include <string>
+
+#include "core/Vec3.hpp"
+#include "particles/GasParticles.hpp"
+
+namespace fountain::io {
+
+struct InitialConditions {
+  GasParticles gas;          // id, mass, x, v_full (= v), u_full (= u), h (0 where absent)
+  Vec3 box_size;             // /Header/BoxSize (scalar or 3-vector in the file)
+  double time = 0.0;         // /Header/Time
+  bool has_smoothing_length = false;
+};
+
+// Reads /Header and /PartType0 (Coordinates, Velocities, ParticleIDs, Masses or the
+// MassTable, InternalEnergy, optional SmoothingLength). Any problem -- missing or
+// truncated file, missing group or dataset, wrong shape, a count that disagrees with the
+// header, zero gas particles, NaN/inf or non-positive mass or energy -- throws InputError
+// naming the file, the dataset and (for bad values) the particle ID.
+InitialConditions read_initial_conditions(const std::string& path);
+
+// Writes gas initial conditions in the same layout (used by `fountain ic`).
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const Vec3& box_size,
+                              bool periodic, double time = 0.0);
+
+}  // namespace fountain::io

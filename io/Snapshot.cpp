@@ -1,0 +1,284 @@
+// Snapshot writer.
+//
+// Which yt frontend reads these files (decided from the yt 4.1 sources):
+//  * yt's SWIFT frontend (yt/frontends/swift) accepts a file only if /Header has
+//    Code == "SWIFT", and it then also needs the groups /RuntimePars, /Policy, /HydroScheme
+//    and /SubgridScheme. Claiming to be SWIFT would be a lie, so we do not.
+//  * yt's GadgetHDF5Dataset (yt/frontends/gadget) accepts any HDF5 file with a /Header
+//    group, no /FOF, /Group or /Subhalo group, and /Header Code != "SWIFT". Its subclasses
+//    (OWLS, EAGLE, Arepo, Gizmo) need groups or datasets we never write (/Constants,
+//    /Config, /HashTable, /RuntimePars, GFM_* fields, a 2-D Metallicity), so these files are
+//    recognised as plain GADGET HDF5 and nothing else.
+//  So the file is a valid GADGET HDF5 snapshot (/Header as GADGET-2 writes it, /PartType0
+//  datasets, MassTable zeros with per-particle Masses) with SWIFT's extras on top: /Units
+//  (SWIFT attribute names), /Parameters (one "Section:key" string attribute per parameter),
+//  /Code, and SWIFT-style unit attributes on every dataset (as swiftsimio reads them:
+//  1-element float arrays).
+//  Two consequences for yt's GADGET reader:
+//  * it needs a scalar /Header/BoxSize (it computes ones(3) * BoxSize), so a cubic box is
+//    written as a scalar (GADGET convention) and only a non-cubic box as 3 values (SWIFT
+//    convention; yt then needs an explicit bounding_box);
+//  * it ignores /Units (it assumes kpc, 1e10 Msun, km/s unless given unit_base), so /Units
+//    also carries the GADGET names UnitLength_in_cm, UnitMass_in_g and
+//    UnitVelocity_in_cm_per_s, to be passed as yt.load(path, unit_base={...}); see
+//    tests/check_snapshot_yt.py.
+#include "io/Snapshot.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/Error.hpp"
+#include "io/Hdf5File.hpp"
+
+namespace fountain::io {
+
+namespace {
+
+using hdf5::File;
+
+// ---- YAML flattening -------------------------------------------------------------------
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+// A YAML scalar as text: quotes removed (with their escapes), a trailing comment dropped.
+std::string unquote(const std::string& raw) {
+  const std::string s = trim(raw);
+  if (s.size() >= 2 && s.front() == '"' && s.back() == '"') {
+    std::string out;
+    for (std::size_t i = 1; i + 1 < s.size(); ++i) {
+      if (s[i] == '\\' && i + 2 < s.size()) {
+        const char c = s[++i];
+        out += c == 'n' ? '\n' : c == 't' ? '\t' : c;
+      } else {
+        out += s[i];
+      }
+    }
+    return out;
+  }
+  if (s.size() >= 2 && s.front() == '\'' && s.back() == '\'') {
+    std::string out;
+    for (std::size_t i = 1; i + 1 < s.size(); ++i) {
+      out += s[i];
+      if (s[i] == '\'' && s[i + 1] == '\'') ++i;
+    }
+    return out;
+  }
+  const auto hash = s.find(" #");
+  return hash == std::string::npos ? s : trim(s.substr(0, hash));
+}
+
+// Position of the ':' that ends a mapping key on this (trimmed) line, or npos.
+std::size_t key_colon(const std::string& line) {
+  std::size_t i = 0;
+  if (!line.empty() && (line[0] == '"' || line[0] == '\'')) {
+    const auto close = line.find(line[0], 1);
+    if (close == std::string::npos) return std::string::npos;
+    i = close + 1;
+  }
+  for (; i < line.size(); ++i)
+    if (line[i] == ':' && (i + 1 == line.size() || line[i + 1] == ' ' || line[i + 1] == '\t')) return i;
+  return std::string::npos;
+}
+
+// Flattens a block-style YAML mapping ("section:" / "  key: value", any depth) into
+// ("section:key", "value") pairs, SWIFT's naming of /Parameters attributes. A block
+// sequence under a key becomes "[a, b]"; flow values are kept as written.
+std::vector<std::pair<std::string, std::string>> flatten_yaml(const std::string& text) {
+  struct Frame {
+    std::size_t indent;
+    std::string name;
+    bool has_children = false;
+    std::vector<std::string> items;
+  };
+  std::vector<std::pair<std::string, std::string>> out;
+  std::vector<Frame> stack;
+  auto pop = [&] {
+    Frame f = std::move(stack.back());
+    stack.pop_back();
+    if (f.has_children) return;
+    std::string value;
+    if (!f.items.empty()) {
+      value = "[";
+      for (std::size_t k = 0; k < f.items.size(); ++k) value += (k ? ", " : "") + f.items[k];
+      value += "]";
+    }
+    out.emplace_back(f.name, value);
+  };
+
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    auto end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string line = text.substr(start, end - start);
+    start = end + 1;
+
+    const std::string content = trim(line);
+    if (content.empty() || content[0] == '#' || content == "---" || content == "...") continue;
+    const std::size_t indent = line.find_first_not_of(' ');
+
+    if (content[0] == '-' && (content.size() == 1 || content[1] == ' ')) {
+      while (!stack.empty() && stack.back().indent > indent) pop();
+      if (!stack.empty()) stack.back().items.push_back(unquote(content.substr(1)));
+      continue;
+    }
+    while (!stack.empty() && stack.back().indent >= indent) pop();
+    const auto colon = key_colon(content);
+    if (colon == std::string::npos) continue;  // not a mapping line; nothing to record
+    const std::string key = unquote(content.substr(0, colon));
+    const std::string name = stack.empty() ? key : stack.back().name + ":" + key;
+    if (!stack.empty()) stack.back().has_children = true;
+    const std::string value = trim(content.substr(colon + 1));
+    if (value.empty() || value[0] == '#') {
+      stack.push_back(Frame{indent, name, false, {}});
+    } else {
+      out.emplace_back(name, unquote(value));
+    }
+  }
+  while (!stack.empty()) pop();
+  return out;
+}
+
+// ---- SWIFT-style unit attributes ---------------------------------------------------------
+
+struct Dimensions {
+  double mass = 0, length = 0, time = 0;
+  double a_scale = 0;  // SWIFT's comoving-to-physical exponent
+};
+
+std::string exponent_term(const char* symbol, double e) {
+  if (e == 0.0) return "";
+  if (e == 1.0) return fmt::format(" {}", symbol);
+  return fmt::format(" {}^{}", symbol, e);
+}
+
+void write_dataset_units(File& file, const std::string& dataset, const Units& units, const Dimensions& d,
+                         const std::string& description) {
+  const double factor = std::pow(units.mass_cgs, d.mass) * std::pow(units.length_cgs, d.length) *
+                        std::pow(units.time_cgs(), d.time);
+  auto one = [](double v) { return std::vector<double>{v}; };
+  file.write_attribute(dataset, "U_M exponent", one(d.mass));
+  file.write_attribute(dataset, "U_L exponent", one(d.length));
+  file.write_attribute(dataset, "U_t exponent", one(d.time));
+  file.write_attribute(dataset, "U_I exponent", one(0.0));
+  file.write_attribute(dataset, "U_T exponent", one(0.0));
+  file.write_attribute(dataset, "h-scale exponent", one(0.0));
+  file.write_attribute(dataset, "a-scale exponent", one(d.a_scale));
+  file.write_attribute(dataset, "Conversion factor to CGS (not including cosmological corrections)", one(factor));
+  // Non-cosmological runs: a = 1, so the physical factor is the same.
+  file.write_attribute(dataset, "Conversion factor to physical CGS (including cosmological corrections)",
+                       one(factor));
+  std::string expression = exponent_term("U_M", d.mass) + exponent_term("U_L", d.length) +
+                           exponent_term("U_t", d.time);
+  expression = expression.empty() ? "[ - ]" : trim(expression);
+  file.write_attribute(dataset, "Expression for physical CGS units", expression);
+  file.write_attribute(dataset, "Description", description);
+}
+
+template <class T>
+void check_size(const std::vector<T>& field, std::size_t n, const char* name) {
+  if (field.size() != n)
+    throw InputError(fmt::format("gas field {} has {} entries, expected {}", name, field.size(), n));
+}
+
+}  // namespace
+
+void write_snapshot(const std::string& path, const GasParticles& gas, const SnapshotInfo& info) {
+  const std::size_t n = gas.size();
+  try {
+    check_size(gas.mass, n, "mass");
+    check_size(gas.x, n, "x");
+    check_size(gas.v, n, "v");
+    check_size(gas.u, n, "u");
+    check_size(gas.h, n, "h");
+    check_size(gas.rho, n, "rho");
+    check_size(gas.wcount, n, "wcount");
+    check_size(gas.time_bin, n, "time_bin");
+  } catch (const InputError& e) {
+    throw InputError("cannot create snapshot " + path + ": " + e.what());
+  }
+
+  hdf5::write_file_atomically(path, "snapshot", [&](File& file) {
+    const Units& units = info.units;
+    const Vec3& b = info.box_size;
+    const bool cubic = b.x == b.y && b.y == b.z;
+
+    // /Header
+    hdf5::write_gadget_header(file, n, cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z},
+                              info.time);
+    file.write_attribute("/Header", "Code", "Fountain");
+    file.write_attribute("/Header", "Periodic", info.periodic ? 1 : 0);
+    file.write_attribute("/Header", "Step", static_cast<std::int64_t>(info.step));
+
+    // /Units (SWIFT names, 1-element arrays as SWIFT writes them; plus the GADGET names)
+    file.create_group("/Units");
+    file.write_attribute("/Units", "Unit length in cgs (U_L)", std::vector<double>{units.length_cgs});
+    file.write_attribute("/Units", "Unit mass in cgs (U_M)", std::vector<double>{units.mass_cgs});
+    file.write_attribute("/Units", "Unit time in cgs (U_t)", std::vector<double>{units.time_cgs()});
+    file.write_attribute("/Units", "Unit current in cgs (U_I)", std::vector<double>{1.0});
+    file.write_attribute("/Units", "Unit temperature in cgs (U_T)", std::vector<double>{1.0});
+    file.write_attribute("/Units", "UnitLength_in_cm", units.length_cgs);
+    file.write_attribute("/Units", "UnitMass_in_g", units.mass_cgs);
+    file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", units.velocity_cgs);
+
+    // /Parameters: one string attribute per key, and the whole YAML text as a dataset
+    file.create_group("/Parameters");
+    for (const auto& [key, value] : flatten_yaml(info.parameters_yaml)) file.write_attribute("/Parameters", key, value);
+    file.write_string_dataset("/Parameters/YAML", info.parameters_yaml);
+
+    // /Code
+    file.create_group("/Code");
+    file.write_attribute("/Code", "Code", "Fountain");
+    file.write_attribute("/Code", "Git Revision", info.git_revision);
+    file.write_attribute("/Code", "Build options", info.build_options);
+    unsigned major = 0, minor = 0, release = 0;
+    H5get_libversion(&major, &minor, &release);
+    file.write_attribute("/Code", "HDF5 library version", fmt::format("{}.{}.{}", major, minor, release));
+
+    // /PartType0
+    const double gm1 = info.gamma - 1.0;
+    const double a_u = -3.0 * gm1;  // SWIFT's a-exponent of the specific internal energy
+    file.create_group("/PartType0");
+    auto ds = [](const char* name) { return std::string("/PartType0/") + name; };
+
+    file.write_dataset(ds("Coordinates"), gas.x);
+    write_dataset_units(file, ds("Coordinates"), units, {0, 1, 0, 1}, "Positions of the particles");
+    file.write_dataset(ds("Velocities"), gas.v);
+    write_dataset_units(file, ds("Velocities"), units, {0, 1, -1, 0}, "Velocities of the particles (predicted)");
+    file.write_dataset(ds("Masses"), gas.mass);
+    write_dataset_units(file, ds("Masses"), units, {1, 0, 0, 0}, "Masses of the particles");
+    file.write_dataset(ds("ParticleIDs"), gas.id);
+    write_dataset_units(file, ds("ParticleIDs"), units, {0, 0, 0, 0}, "Unique IDs of the particles");
+    file.write_dataset(ds("InternalEnergy"), gas.u);
+    write_dataset_units(file, ds("InternalEnergy"), units, {0, 2, -2, a_u},
+                        "Specific internal energies of the particles (predicted)");
+    file.write_dataset(ds("SmoothingLength"), gas.h);
+    write_dataset_units(file, ds("SmoothingLength"), units, {0, 1, 0, 1},
+                        "Smoothing lengths (compact support radius of the kernel) of the particles");
+    file.write_dataset(ds("Density"), gas.rho);
+    write_dataset_units(file, ds("Density"), units, {1, -3, 0, -3}, "SPH densities of the particles");
+    std::vector<double> pressure(n);
+    for (std::size_t i = 0; i < n; ++i) pressure[i] = gm1 * gas.rho[i] * gas.u[i];
+    file.write_dataset(ds("Pressure"), pressure);
+    write_dataset_units(file, ds("Pressure"), units, {1, -1, -2, -3.0 * info.gamma},
+                        fmt::format("Pressures of the particles, (gamma - 1) rho u with gamma = {}", info.gamma));
+    file.write_dataset(ds("NeighbourNumber"), gas.wcount);
+    write_dataset_units(file, ds("NeighbourNumber"), units, {0, 0, 0, 0},
+                        "Kernel-weighted neighbour numbers (4 pi / 3) h^3 sum W of the particles");
+    const std::vector<std::int32_t> bins(gas.time_bin.begin(), gas.time_bin.end());
+    file.write_dataset(ds("TimeBin"), bins);
+    write_dataset_units(file, ds("TimeBin"), units, {0, 0, 0, 0},
+                        "Time bins of the particles (step = 2^bin integer time units)");
+  });
+}
+
+}  // namespace fountain::io

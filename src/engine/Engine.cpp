@@ -1,0 +1,262 @@
+#include "engine/Engine.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "core/Error.hpp"
+#include "hydro/HydroLoops.hpp"
+#include "timestep/Integration.hpp"
+
+namespace fountain {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+Engine::Engine(const RunConfig& config, GasParticles gas)
+    : config_(config), gas_(std::move(gas)), space_(config.space), executor_(config.threads) {
+  timeline_.t_begin = config_.t_begin;
+  timeline_.t_end = config_.t_end;
+  if (gas_.size() == 0) throw InputError("no gas particles to simulate");
+  ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_});
+  guess_smoothing_lengths();
+}
+
+Engine::~Engine() = default;
+
+IntegerTime Engine::to_ticks(double t) const {
+  const double ticks = std::round((t - timeline_.t_begin) / timeline_.time_base());
+  return static_cast<IntegerTime>(std::clamp(ticks, 0.0, static_cast<double>(TimeLine::ticks)));
+}
+
+void Engine::guess_smoothing_lengths() {
+  bool missing = false;
+  for (double h : gas_.h) missing = missing || !(h > 0.0);
+  if (!missing) return;
+  double guess = config_.smoothing_length_guess;
+  if (!(guess > 0.0)) {
+    Vec3 lo = gas_.x[0], hi = gas_.x[0];
+    for (const auto& x : gas_.x)
+      for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], x[k]), hi[k] = std::max(hi[k], x[k]);
+    Vec3 ext = config_.space.periodic ? config_.space.box_size : hi - lo;
+    const double longest = std::max({ext.x, ext.y, ext.z});
+    for (int k = 0; k < 3; ++k) ext[k] = std::max(ext[k], 1e-3 * longest);
+    const double volume = ext.x * ext.y * ext.z;
+    guess = std::cbrt(3.0 * config_.hydro.neighbours * volume / (4.0 * M_PI * static_cast<double>(gas_.size())));
+  }
+  for (double& h : gas_.h)
+    if (!(h > 0.0)) h = guess;
+}
+
+void Engine::rebuild() {
+  // Every particle must sit at the current time before cells are recut.
+  drift_all();
+  space_.rebuild(gas_);
+  for (int c : space_.leaves()) {
+    Cell& cell = space_.cell(c);
+    cell.ti_drift = ti_current_;
+    IntegerTime end = TimeLine::ticks;
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+      end = std::min(end, TimeLine::active(gas_.time_bin[i], ti_current_) ? ti_current_
+                                                                           : TimeLine::step_end(gas_.time_bin[i], ti_current_));
+    cell.ti_end_min = end;
+  }
+  ctx_->dx_bound = 0.0;
+  ctx_->cover_exceeded = false;
+  build_graph();
+  rebuild_pending_ = false;
+}
+
+void Engine::build_graph() {
+  graph_ = tasks::TaskGraph();
+  const auto& leaves = space_.leaves();
+  const std::size_t ncells = space_.cells().size();
+  std::vector<int> drift(ncells, -1), ghost(ncells, -1), kick_close(ncells, -1);
+  struct Pair { int task, ci, cj; };
+  std::vector<Pair> dpairs, fpairs;
+  for (int c : leaves) {
+    drift[c] = graph_.add(types_.drift, c, -1, c);
+    graph_.add(types_.density_self, c, -1, c);
+    for (int n : space_.neighbours(c)) dpairs.push_back({graph_.add(types_.density_pair, c, n, c), c, n});
+    ghost[c] = graph_.add(types_.ghost, c, -1, c);
+    graph_.add(types_.force_self, c, -1, c);
+    for (int n : space_.neighbours(c)) fpairs.push_back({graph_.add(types_.force_pair, c, n, c), c, n});
+    kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
+    graph_.add(types_.timestep, c, -1, c);
+    graph_.add(types_.kick_open, c, -1, c);
+  }
+  // Reads of a neighbour cell: after its drift (density), after its ghost (force), and
+  // before it closes its step (the kick rewrites the predicted state others read).
+  for (const auto& p : dpairs) graph_.depends(drift[p.cj], p.task);
+  for (const auto& p : fpairs) {
+    graph_.depends(ghost[p.cj], p.task);
+    graph_.depends(p.task, kick_close[p.cj]);
+  }
+  graph_.finalize();
+}
+
+void Engine::drift_all() {
+  ctx_->ti_current = ti_current_;
+  const auto& leaves = space_.leaves();
+  if (leaves.empty()) return;  // before the first rebuild: nothing has moved
+  StepContext& ctx = *ctx_;
+  executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l]); });
+}
+
+std::size_t Engine::activate(Phase phase) {
+  const auto& leaves = space_.leaves();
+  const std::size_t ncells = space_.cells().size();
+  cell_active_.assign(ncells, 0);
+  std::vector<char> needs_drift(ncells, 0);
+  std::size_t active_particles = 0;
+  for (int c : leaves) {
+    if (space_.cell(c).ti_end_min != ti_current_) continue;
+    cell_active_[c] = 1;
+    needs_drift[c] = 1;
+    for (int n : space_.neighbours(c)) needs_drift[n] = 1;
+  }
+  for (int c : leaves)
+    if (cell_active_[c]) {
+      const Cell& cell = space_.cell(c);
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+        active_particles += ctx_->is_active(i) ? 1 : 0;
+    }
+  for (int t = 0; t < graph_.size(); ++t) {
+    auto& task = graph_.task(t);
+    if (task.type == types_.drift) {
+      task.active = needs_drift[task.ci];
+      continue;
+    }
+    bool allowed = true;
+    if (phase == Phase::Density)
+      allowed = task.type == types_.density_self || task.type == types_.density_pair || task.type == types_.ghost;
+    else if (phase == Phase::Hydro)
+      allowed = task.type != types_.kick_close && task.type != types_.timestep && task.type != types_.kick_open;
+    task.active = allowed && cell_active_[task.ci];
+  }
+  return active_particles;
+}
+
+void Engine::prepare_step(IntegerTime ti) {
+  ti_current_ = ti;
+  ctx_->ti_current = ti;
+  // How far particles will have moved since the rebuild once drifted to ti.
+  double dx_bound = 0.0;
+  for (int c : space_.leaves()) {
+    const Cell& cell = space_.cell(c);
+    dx_bound = std::max(dx_bound, cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti)));
+  }
+  if (!rebuild_pending_) {
+    for (int c : space_.leaves()) {
+      const Cell& cell = space_.cell(c);
+      const double dx = cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti));
+      // Allow h to grow by 10% in the step before the cover runs out.
+      if (1.1 * cell.h_max + dx + dx_bound > cell.r_cover) {
+        rebuild_pending_ = true;
+        break;
+      }
+    }
+  }
+  if (rebuild_pending_) {
+    rebuild();
+  } else {
+    ctx_->dx_bound = dx_bound;
+  }
+}
+
+void Engine::run_graph(StepInfo* info) {
+  ctx_->cover_exceeded = false;
+  ctx_->h_capped = 0;
+  StepContext& ctx = *ctx_;
+  const TaskTypes& T = types_;
+  auto runner = [&ctx, &T](const tasks::Task& t) {
+    if (t.type == T.drift) integration::drift(ctx, t.ci);
+    else if (t.type == T.density_self) hydro::density_self(ctx, t.ci);
+    else if (t.type == T.density_pair) hydro::density_pair(ctx, t.ci, t.cj);
+    else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
+    else if (t.type == T.force_self) hydro::force_self(ctx, t.ci);
+    else if (t.type == T.force_pair) hydro::force_pair(ctx, t.ci, t.cj);
+    else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);
+    else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
+    else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
+  };
+  executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr);
+  if (info) {
+    info->tasks_wall_s += 1e-9 * static_cast<double>(executor_.last_wall_ns());
+    info->tasks_busy_s += 1e-9 * static_cast<double>(executor_.last_busy_ns());
+    for (const auto& t : graph_.tasks()) info->tasks_run += t.active ? 1 : 0;
+  }
+  if (ctx_->cover_exceeded) rebuild_pending_ = true;
+  if (info && ctx_->h_capped > 0)
+    fmt::print(stderr, "warning: {} particles had h capped by their cell's reach at t = {}; rebuilding\n",
+               ctx_->h_capped.load(), time());
+}
+
+void Engine::initialise() {
+  for (auto& b : gas_.time_bin) b = 0;
+  ti_current_ = 0;
+  ctx_->first_step = true;
+  rebuild_pending_ = true;
+  // A first density pass gives the MSPH rule real densities to compare; it is repeated
+  // (with the cells recut) until every h fits in its cell's reach.
+  converge_density(Phase::Density);
+  prepare_step(0);
+  activate(Phase::Full);
+  run_graph(nullptr);
+  ctx_->first_step = false;
+}
+
+void Engine::converge_density(Phase phase) {
+  for (int attempt = 0; attempt < 64; ++attempt) {
+    prepare_step(ti_current_);
+    activate(phase);
+    run_graph(nullptr);
+    if (!rebuild_pending_) return;
+  }
+  throw InputError("smoothing lengths still outgrow their cells after 64 rebuilds: are the initial conditions sane?");
+}
+
+void Engine::compute_hydro_at(IntegerTime ti) {
+  rebuild_pending_ = true;
+  ti_current_ = ti;
+  converge_density(Phase::Hydro);
+}
+
+StepInfo Engine::step(IntegerTime ti_stop) {
+  const auto t0 = std::chrono::steady_clock::now();
+  StepInfo info;
+  IntegerTime ti_next = std::min(ti_stop, TimeLine::ticks);
+  for (int c : space_.leaves()) ti_next = std::min(ti_next, space_.cell(c).ti_end_min);
+  if (ti_next <= ti_current_) ti_next = ti_current_;
+  const IntegerTime ti_prev = ti_current_;
+  const int rebuilds_before = space_.rebuild_count();
+  prepare_step(ti_next);
+  info.active = activate(Phase::Full);
+  if (info.active > 0) run_graph(&info);
+  ++steps_;
+  info.step = steps_;
+  info.time = time();
+  info.dt = timeline_.time(ti_next) - timeline_.time(ti_prev);
+  info.rebuilt = space_.rebuild_count() != rebuilds_before;
+  info.wall_s = seconds_since(t0);
+  return info;
+}
+
+Totals Engine::totals() const {
+  Totals t;
+  for (std::size_t i = 0; i < gas_.size(); ++i) {
+    const double m = gas_.mass[i];
+    t.mass += m;
+    t.momentum += gas_.v[i] * m;
+    t.kinetic += 0.5 * m * dot(gas_.v[i], gas_.v[i]);
+    t.thermal += m * gas_.u[i];
+  }
+  return t;
+}
+
+}  // namespace fountain

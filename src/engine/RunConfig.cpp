@@ -1,0 +1,42 @@
+#include "engine/RunConfig.hpp"
+
+#include <fmt/format.h>
+
+#include "core/Error.hpp"
+#include "params/ParameterFile.hpp"
+
+namespace fountain {
+
+RunConfig RunConfig::from(const ParameterFile& p) {
+  RunConfig c;
+  c.t_begin = p.real("run.t_begin");
+  c.t_end = p.real("run.t_end");
+  if (!(c.t_end > c.t_begin))
+    throw InputError(fmt::format("{}: key 'run.t_end' = {} must be later than run.t_begin = {}", p.origin(),
+                                 c.t_end, c.t_begin));
+  c.threads = static_cast<int>(p.integer("run.threads"));
+  c.max_steps = p.integer("run.max_steps");
+  c.smoothing_length_guess = p.real("initial_conditions.smoothing_length_guess");
+  c.hydro = HydroParams::from(p);
+  c.integration.dt_min = p.real("time_integration.dt_min");
+  c.integration.dt_max = p.real("time_integration.dt_max");
+  if (c.integration.dt_min > c.integration.dt_max)
+    throw InputError(fmt::format("{}: key 'time_integration.dt_min' = {} exceeds time_integration.dt_max = {}",
+                                 p.origin(), c.integration.dt_min, c.integration.dt_max));
+  c.space.periodic = p.flag("initial_conditions.periodic");
+  c.space.split_size = static_cast<int>(p.integer("space.cell_split_size"));
+  c.space.top_cells = static_cast<int>(p.integer("space.top_cells"));
+  c.space.skin = p.real("space.rebuild_skin");
+  c.units.length_cgs = p.real("units.length_cgs");
+  c.units.mass_cgs = p.real("units.mass_cgs");
+  c.units.velocity_cgs = p.real("units.velocity_cgs");
+  c.output.directory = p.text("output.directory");
+  c.output.basename = p.text("output.basename");
+  c.output.delta_time = p.real("output.delta_time");
+  c.output.dump_task_graph = p.flag("output.dump_task_graph");
+  c.output.dump_timeline_every = p.integer("output.dump_timeline_every");
+  c.parameters_yaml = p.used_as_yaml();
+  return c;
+}
+
+}  // namespace fountain

@@ -1,0 +1,38 @@
+// Everything a run is configured with, read once from the validated parameter file.
+#pragma once
+#include <string>
+
+#include "core/Units.hpp"
+#include "engine/StepContext.hpp"
+#include "hydro/HydroParams.hpp"
+#include "space/Space.hpp"
+
+namespace fountain {
+
+class ParameterFile;
+
+struct OutputConfig {
+  std::string directory = "output";
+  std::string basename = "snapshot";
+  double delta_time = 0.0;          // 0: first and last only
+  bool dump_task_graph = false;
+  long long dump_timeline_every = 0;
+};
+
+struct RunConfig {
+  double t_begin = 0.0;
+  double t_end = 1.0;
+  int threads = 0;
+  long long max_steps = 0;
+  double smoothing_length_guess = 0.0;
+  HydroParams hydro;
+  IntegrationParams integration;
+  SpaceConfig space;
+  Units units;
+  OutputConfig output;
+  std::string parameters_yaml;      // the parameters in force, for snapshots
+
+  static RunConfig from(const ParameterFile& p);
+};
+
+}  // namespace fountain

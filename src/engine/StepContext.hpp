@@ -1,0 +1,35 @@
+// What every task of a step needs: the particles, the cells, the parameters and the clock.
+#pragma once
+#include <atomic>
+
+#include "hydro/HydroParams.hpp"
+#include "particles/GasParticles.hpp"
+#include "space/Space.hpp"
+#include "timestep/TimeLine.hpp"
+
+namespace fountain {
+
+struct IntegrationParams {
+  double dt_min = 1e-8;
+  double dt_max = 1e-6;
+};
+
+struct StepContext {
+  GasParticles& gas;
+  Space& space;
+  const HydroParams& hydro;
+  const IntegrationParams& integration;
+  const TimeLine& timeline;
+
+  IntegerTime ti_current = 0;
+  bool first_step = true;   // no closing half-kick: the particles have no step behind them
+  double dx_bound = 0.0;    // largest distance any particle moved since the rebuild
+
+  // Set by tasks, read by the engine after the step.
+  std::atomic<bool> cover_exceeded{false};  // some h outgrew its cell's cover: rebuild
+  std::atomic<int> h_capped{0};             // particles whose h was capped by the cover
+
+  bool is_active(std::size_t i) const { return TimeLine::active(gas.time_bin[i], ti_current); }
+};
+
+}  // namespace fountain

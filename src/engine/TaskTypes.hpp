@@ -1,0 +1,24 @@
+// The one place where the engine's task types are registered.
+#pragma once
+#include "tasks/TaskGraph.hpp"
+
+namespace fountain {
+
+struct TaskTypes {
+  int drift, density_self, density_pair, ghost, force_self, force_pair, kick_close, timestep, kick_open;
+  tasks::TaskTypeRegistry registry;
+
+  TaskTypes() {
+    drift = registry.add({"drift", "", "integration"});
+    density_self = registry.add({"density", "self", "hydro"});
+    density_pair = registry.add({"density", "pair", "hydro"});
+    ghost = registry.add({"ghost", "", "hydro"});
+    force_self = registry.add({"force", "self", "hydro"});
+    force_pair = registry.add({"force", "pair", "hydro"});
+    kick_close = registry.add({"kick", "close", "integration"});
+    timestep = registry.add({"timestep", "", "integration"});
+    kick_open = registry.add({"kick", "open", "integration"});
+  }
+};
+
+}  // namespace fountain

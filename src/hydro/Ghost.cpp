@@ -1,0 +1,120 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "core/Error.hpp"
+#include "hydro/HydroIact.hpp"
+#include "hydro/HydroLoops.hpp"
+
+namespace fountain::hydro {
+
+namespace {
+
+struct Candidate {
+  Vec3 dx, dv;
+  double r2, m;
+};
+
+// Coupled particles within `radius` of particle i, from its own cell and then the
+// neighbour cells in their fixed order (so sums come out the same on every run).
+void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double radius,
+                       std::vector<Candidate>& out) {
+  out.clear();
+  const GasParticles& gas = ctx.gas;
+  const HydroParams& p = ctx.hydro;
+  const MsphState si = msph_state(gas, i, p.gamma);
+  const double r2max = radius * radius;
+  auto scan = [&](int cj) {
+    const Cell& b = ctx.space.cell(cj);
+    for (std::size_t j = b.first; j < b.first + b.count; ++j) {
+      const Vec3 dx = ctx.space.separation(gas.x[i], gas.x[j]);
+      const double r2 = dot(dx, dx);
+      if (r2 >= r2max) continue;
+      const Vec3 dv = gas.v[i] - gas.v[j];
+      if (j != i && msph_decoupled(si, msph_state(gas, j, p.gamma), dx, dv, r2, p)) continue;
+      out.push_back({dx, dv, r2, gas.mass[j]});
+    }
+  };
+  scan(ci);
+  for (int cj : ctx.space.neighbours(ci)) scan(cj);
+}
+
+DensitySums sums_at(const std::vector<Candidate>& cand, double h) {
+  DensitySums s;
+  const double h2 = h * h, h_inv = 1.0 / h;
+  for (const auto& c : cand)
+    if (c.r2 < h2) iact_density(c.dx, c.dv, c.r2, h_inv, c.m, s);
+  return s;
+}
+
+}  // namespace
+
+void ghost(StepContext& ctx, int ci) {
+  GasParticles& gas = ctx.gas;
+  Cell& cell = ctx.space.cell(ci);
+  const HydroParams& p = ctx.hydro;
+  // Neighbours are complete within this radius of any particle of the cell.
+  double h_limit = cell.r_cover - cell.dx_max - ctx.dx_bound;
+  const bool limit_is_cover = !(p.h_max > 0.0 && p.h_max < h_limit);
+  if (!limit_is_cover) h_limit = p.h_max;
+  thread_local std::vector<Candidate> cand;
+
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (!ctx.is_active(i)) continue;
+    double h = gas.h[i];
+    DensitySums s;
+    s.rho = gas.rho[i];
+    s.w = gas.wcount[i];
+    s.w_dh = gas.wcount_dh[i];
+    s.div = gas.div_v[i];
+    s.curl = gas.curl_v[i];
+    DensityResult res = finish_density(s, h);
+    const bool converged = std::fabs(res.wcount - p.neighbours) <= p.neighbours_tolerance && h <= h_limit;
+    if (!converged) {
+      gather_candidates(ctx, ci, i, h_limit, cand);
+      const DensityResult at_limit = finish_density(sums_at(cand, h_limit), h_limit);
+      if (at_limit.wcount < p.neighbours - p.neighbours_tolerance) {
+        // Not enough neighbours within reach: take the reach and ask for a rebuild.
+        h = h_limit;
+        res = at_limit;
+        if (limit_is_cover) {
+          ctx.cover_exceeded = true;
+          ctx.h_capped.fetch_add(1, std::memory_order_relaxed);
+        }
+      } else {
+        double lo = 0.0, hi = h_limit;
+        if (!(h > 0.0 && h < h_limit)) h = 0.5 * h_limit;
+        bool done = false;
+        for (int it = 0; it < p.max_h_iterations; ++it) {
+          res = finish_density(sums_at(cand, h), h);
+          const double f = res.wcount - p.neighbours;
+          if (std::fabs(f) <= p.neighbours_tolerance) {
+            done = true;
+            break;
+          }
+          (f < 0.0 ? lo : hi) = h;
+          double next = res.wcount_dh > 0.0 ? h - f / res.wcount_dh : -1.0;
+          if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+          h = next;
+        }
+        if (!done)
+          throw InputError(fmt::format("smoothing length of gas particle id {} did not converge in {} iterations "
+                                       "(h = {}, neighbour number {})",
+                                       gas.id[i], p.max_h_iterations, h, res.wcount));
+      }
+    }
+    gas.h[i] = h;
+    gas.rho[i] = res.rho;
+    gas.wcount[i] = res.wcount;
+    gas.wcount_dh[i] = res.wcount_dh;
+    gas.div_v[i] = res.div_v;
+    gas.curl_v[i] = res.curl_v;
+  }
+  double h_max = 0.0;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) h_max = std::max(h_max, gas.h[i]);
+  cell.h_max = h_max;
+}
+
+}  // namespace fountain::hydro

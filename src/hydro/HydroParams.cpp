@@ -1,0 +1,23 @@
+#include "hydro/HydroParams.hpp"
+
+#include "params/ParameterFile.hpp"
+
+namespace fountain {
+
+HydroParams HydroParams::from(const ParameterFile& p) {
+  HydroParams h;
+  h.gamma = p.real("hydro.gamma");
+  h.neighbours = p.real("hydro.neighbours");
+  h.neighbours_tolerance = p.real("hydro.neighbours_tolerance");
+  h.sph_alpha = p.real("hydro.sph_alpha");
+  h.viscosity_alpha = p.real("hydro.viscosity_alpha");
+  h.courant = p.real("hydro.courant");
+  h.msph = p.flag("hydro.msph");
+  h.msph_A = p.real("hydro.msph_A");
+  h.msph_A_prime = p.real("hydro.msph_A_prime");
+  h.h_max = p.real("hydro.h_max");
+  h.max_h_iterations = static_cast<int>(p.integer("hydro.max_h_iterations"));
+  return h;
+}
+
+}  // namespace fountain

@@ -1,0 +1,24 @@
+// The SPH and MSPH parameters the interaction kernels need, read once from the parameter file.
+#pragma once
+
+namespace fountain {
+
+class ParameterFile;
+
+struct HydroParams {
+  double gamma = 5.0 / 3.0;
+  double neighbours = 32.0;
+  double neighbours_tolerance = 1.0;
+  double sph_alpha = 1.5;
+  double viscosity_alpha = 1.3;
+  double courant = 0.1;
+  bool msph = true;
+  double msph_A = 10.0;
+  double msph_A_prime = 10.0;
+  double h_max = 0.0;  // 0: unlimited
+  int max_h_iterations = 50;
+
+  static HydroParams from(const ParameterFile& p);
+};
+
+}  // namespace fountain

@@ -1,0 +1,187 @@
+#include "params/ParameterFile.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "core/Error.hpp"
+
+namespace fountain {
+
+namespace {
+
+const ParamSpec* find_spec(const std::string& key) {
+  for (const auto& p : parameter_schema())
+    if (p.key == key) return &p;
+  return nullptr;
+}
+
+bool parse_real(const std::string& s, double& out) {
+  if (s.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  out = std::strtod(s.c_str(), &end);
+  return errno == 0 && end == s.c_str() + s.size() && std::isfinite(out);
+}
+
+bool parse_integer(const std::string& s, long long& out) {
+  if (s.empty()) return false;
+  errno = 0;
+  char* end = nullptr;
+  out = std::strtoll(s.c_str(), &end, 10);
+  if (errno == 0 && end == s.c_str() + s.size()) return true;
+  double d = 0;  // accept 1e6-style integers
+  if (parse_real(s, d) && d == std::floor(d) && std::fabs(d) < 9e15) {
+    out = static_cast<long long>(d);
+    return true;
+  }
+  return false;
+}
+
+bool parse_bool(const std::string& s, bool& out) {
+  if (s == "true" || s == "True" || s == "yes" || s == "on") return out = true, true;
+  if (s == "false" || s == "False" || s == "no" || s == "off") return out = false, true;
+  return false;
+}
+
+// Checks one value against its spec and returns its canonical text.
+std::string check_value(const ParamSpec& spec, const std::string& value, const std::string& where) {
+  auto out_of_range = [&](double v) {
+    const bool lo_bad = spec.min_exclusive ? !(v > spec.min) : !(v >= spec.min);
+    return lo_bad || !(v <= spec.max);
+  };
+  auto range_text = [&] {
+    return fmt::format("{}{:g}, {:g}]", spec.min_exclusive ? "(" : "[", spec.min, spec.max);
+  };
+  switch (spec.kind) {
+    case ParamKind::Real: {
+      double v = 0;
+      if (!parse_real(value, v))
+        throw InputError(fmt::format("{}: key '{}' must be a finite number, got '{}'", where, spec.key, value));
+      if (out_of_range(v))
+        throw InputError(fmt::format("{}: key '{}' = {} is out of range {}", where, spec.key, value, range_text()));
+      return fmt::format("{}", v);
+    }
+    case ParamKind::Integer: {
+      long long v = 0;
+      if (!parse_integer(value, v))
+        throw InputError(fmt::format("{}: key '{}' must be an integer, got '{}'", where, spec.key, value));
+      if (out_of_range(static_cast<double>(v)))
+        throw InputError(fmt::format("{}: key '{}' = {} is out of range {}", where, spec.key, value, range_text()));
+      return fmt::format("{}", v);
+    }
+    case ParamKind::Boolean: {
+      bool b = false;
+      if (!parse_bool(value, b))
+        throw InputError(fmt::format("{}: key '{}' must be true or false, got '{}'", where, spec.key, value));
+      return b ? "true" : "false";
+    }
+    case ParamKind::Text:
+      if (!spec.choices.empty()) {
+        bool ok = false;
+        for (const auto& c : spec.choices) ok = ok || c == value;
+        if (!ok) throw InputError(fmt::format("{}: key '{}' has unknown value '{}'", where, spec.key, value));
+      }
+      return value;
+  }
+  return value;
+}
+
+}  // namespace
+
+ParameterFile ParameterFile::load(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(fmt::format("{}: cannot open the parameter file", path));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return parse(ss.str(), path);
+}
+
+ParameterFile ParameterFile::parse(const std::string& yaml_text, const std::string& origin) {
+  ParameterFile pf;
+  pf.origin_ = origin;
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw InputError(fmt::format("{}:{}: malformed YAML: {}", origin, e.mark.line + 1, e.msg));
+  }
+  if (!root.IsMap())
+    throw InputError(fmt::format("{}: the parameter file must be a mapping of sections", origin));
+  for (const auto& section : root) {
+    const auto sec = section.first.as<std::string>();
+    if (!section.second.IsMap())
+      throw InputError(fmt::format("{}:{}: section '{}' must be a mapping of keys", origin,
+                                   section.second.Mark().line + 1, sec));
+    for (const auto& entry : section.second) {
+      const std::string key = sec + "." + entry.first.as<std::string>();
+      const std::string where = fmt::format("{}:{}", origin, entry.first.Mark().line + 1);
+      const ParamSpec* spec = find_spec(key);
+      if (!spec) throw InputError(fmt::format("{}: unknown key '{}'", where, key));
+      if (!entry.second.IsScalar())
+        throw InputError(fmt::format("{}: key '{}' must be a single value", where, key));
+      if (pf.given_.count(key)) throw InputError(fmt::format("{}: key '{}' is given twice", where, key));
+      pf.values_[key] = check_value(*spec, entry.second.Scalar(), where);
+      pf.given_[key] = true;
+    }
+  }
+  for (const auto& spec : parameter_schema()) {
+    if (pf.values_.count(spec.key)) continue;
+    if (!spec.default_value)
+      throw InputError(fmt::format("{}: required key '{}' is missing", origin, spec.key));
+    pf.values_[spec.key] = check_value(spec, *spec.default_value, origin + " (default)");
+  }
+  return pf;
+}
+
+const ParamSpec& ParameterFile::spec(const std::string& key) const {
+  const ParamSpec* s = find_spec(key);
+  if (!s) throw std::logic_error("parameter '" + key + "' is not in the schema");
+  return *s;
+}
+
+double ParameterFile::real(const std::string& key) const {
+  spec(key);
+  return std::strtod(values_.at(key).c_str(), nullptr);
+}
+
+long long ParameterFile::integer(const std::string& key) const {
+  spec(key);
+  return std::strtoll(values_.at(key).c_str(), nullptr, 10);
+}
+
+bool ParameterFile::flag(const std::string& key) const {
+  spec(key);
+  return values_.at(key) == "true";
+}
+
+const std::string& ParameterFile::text(const std::string& key) const {
+  spec(key);
+  return values_.at(key);
+}
+
+std::string ParameterFile::used_as_yaml() const {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  std::string section;
+  for (const auto& [key, value] : values_) {
+    const auto dot = key.find('.');
+    const std::string sec = key.substr(0, dot);
+    if (sec != section) {
+      if (!section.empty()) out << YAML::EndMap;
+      section = sec;
+      out << YAML::Key << sec << YAML::Value << YAML::BeginMap;
+    }
+    out << YAML::Key << key.substr(dot + 1) << YAML::Value << value;
+  }
+  if (!section.empty()) out << YAML::EndMap;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace fountain

@@ -1,0 +1,36 @@
+// A parsed, validated YAML parameter file: every key checked against the schema before use.
+#pragma once
+#include <map>
+#include <string>
+
+#include "params/ParameterSchema.hpp"
+
+namespace fountain {
+
+class ParameterFile {
+ public:
+  // Parses `path` and validates it: unknown keys, wrong types, out-of-range values and
+  // missing required keys throw InputError naming the key and the file.
+  static ParameterFile load(const std::string& path);
+  // Same, from text (for tests and for restart files); `origin` names it in messages.
+  static ParameterFile parse(const std::string& yaml_text, const std::string& origin);
+
+  double real(const std::string& key) const;
+  long long integer(const std::string& key) const;
+  bool flag(const std::string& key) const;
+  const std::string& text(const std::string& key) const;
+  bool was_given(const std::string& key) const { return given_.count(key) != 0; }
+
+  // Every key with the value in force (given or default), as YAML text.
+  std::string used_as_yaml() const;
+  const std::map<std::string, std::string>& values() const { return values_; }
+  const std::string& origin() const { return origin_; }
+
+ private:
+  const ParamSpec& spec(const std::string& key) const;
+  std::string origin_;
+  std::map<std::string, std::string> values_;  // canonical text of each value in force
+  std::map<std::string, bool> given_;
+};
+
+}  // namespace fountain

@@ -1,0 +1,114 @@
+#include "params/ParameterSchema.hpp"
+
+#include <fmt/format.h>
+
+namespace fountain {
+
+namespace {
+constexpr double inf = std::numeric_limits<double>::infinity();
+
+ParamSpec real(std::string key, std::optional<std::string> def, double lo, double hi,
+               std::string doc, bool lo_exclusive = false) {
+  return {std::move(key), ParamKind::Real, std::move(def), lo, hi, lo_exclusive, std::move(doc), {}};
+}
+ParamSpec integer(std::string key, std::optional<std::string> def, double lo, double hi,
+                  std::string doc) {
+  return {std::move(key), ParamKind::Integer, std::move(def), lo, hi, false, std::move(doc), {}};
+}
+ParamSpec boolean(std::string key, std::string def, std::string doc) {
+  return {std::move(key), ParamKind::Boolean, std::move(def), -inf, inf, false, std::move(doc), {}};
+}
+ParamSpec text(std::string key, std::optional<std::string> def, std::string doc,
+               std::vector<std::string> choices = {}) {
+  return {std::move(key), ParamKind::Text, std::move(def), -inf, inf, false, std::move(doc),
+          std::move(choices)};
+}
+}  // namespace
+
+const std::vector<ParamSpec>& parameter_schema() {
+  static const std::vector<ParamSpec> schema = {
+      // run
+      real("run.t_begin", "0", -inf, inf, "Simulation time of the initial conditions (internal units)."),
+      real("run.t_end", std::nullopt, -inf, inf, "Time at which the run stops (internal units). Required."),
+      integer("run.threads", "0", 0, 4096, "Worker threads; 0 uses every core TBB sees."),
+      integer("run.max_steps", "0", 0, 1e15, "Stop after this many steps; 0 means no limit."),
+      // initial conditions
+      text("initial_conditions.file", std::nullopt,
+           "GADGET-layout HDF5 initial conditions; a relative path is taken from the parameter file's folder. Required."),
+      boolean("initial_conditions.periodic", "false",
+              "Periodic box of size /Header/BoxSize (true) or open boundaries (false)."),
+      real("initial_conditions.smoothing_length_guess", "0", 0, inf,
+           "First guess of h where the file has no SmoothingLength; 0 estimates it from the mean interparticle spacing."),
+      // output
+      text("output.directory", "output", "Folder for snapshots, task dumps and the log; created if missing; relative to the working directory."),
+      text("output.basename", "snapshot", "Snapshot files are <basename>_NNNN.hdf5."),
+      real("output.delta_time", "0", 0, inf,
+           "Time between snapshots; 0 writes only the first and the last."),
+      boolean("output.dump_task_graph", "false",
+              "Write the task dependency graph (DOT and SWIFT-style CSV) after the first step."),
+      integer("output.dump_timeline_every", "0", 0, 1e15,
+              "Write a per-task timeline (CSV) every this many steps; 0 never."),
+      // units
+      real("units.length_cgs", "3.0856775814913673e24", 0, inf, "Internal length unit in cm (default Mpc).", true),
+      real("units.mass_cgs", "1.988409870698051e33", 0, inf, "Internal mass unit in g (default Msun).", true),
+      real("units.velocity_cgs", "1e5", 0, inf, "Internal velocity unit in cm/s (default km/s).", true),
+      // hydro
+      real("hydro.gamma", "1.6666666666666667", 1, 3, "Adiabatic index.", true),
+      real("hydro.neighbours", "32", 1, 1e4, "Target kernel-weighted neighbour number N_ngb."),
+      real("hydro.neighbours_tolerance", "1", 0, 1e4,
+           "Accepted deviation of the weighted neighbour number from N_ngb.", true),
+      real("hydro.sph_alpha", "1.5", 0, 2, "Power alpha of the momentum equation (the paper: 3/2)."),
+      real("hydro.viscosity_alpha", "1.3", 0, 10, "Artificial-viscosity alpha_v."),
+      real("hydro.courant", "0.1", 0, 1, "Courant factor alpha_c.", true),
+      boolean("hydro.msph", "true", "Multiphase SPH neighbour rule (paper eqs 4-6); false gives standard SPH."),
+      real("hydro.msph_A", "10", 1, inf, "Density-contrast threshold A of the MSPH rule."),
+      real("hydro.msph_A_prime", "10", 1, inf, "Energy-contrast threshold A' of the MSPH rule."),
+      real("hydro.h_max", "0", 0, inf, "Largest smoothing length allowed; 0 means no limit."),
+      integer("hydro.max_h_iterations", "50", 1, 1000, "Iterations of the smoothing-length solver before the run stops with an error."),
+      // time integration
+      real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
+      real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),
+      // space
+      integer("space.cell_split_size", "64", 8, 1e6, "Octree cells with more particles than this are split."),
+      integer("space.top_cells", "0", 0, 256, "Top-level cells along the longest box side; 0 chooses from the particle number."),
+      real("space.rebuild_skin", "0.25", 0, 10,
+           "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),
+  };
+  return schema;
+}
+
+std::string parameter_reference_markdown() {
+  std::string out =
+      "# Parameter reference\n\n"
+      "Generated from `src/params/ParameterSchema.cpp` by `fountain params`; a test keeps this file\n"
+      "identical to that output. A parameter file is YAML with one mapping per section. Unknown\n"
+      "keys, values of the wrong type, values out of range and missing required keys stop the run\n"
+      "before any work, with a message naming the key and the file.\n";
+  std::string section;
+  for (const auto& p : parameter_schema()) {
+    const auto dot = p.key.find('.');
+    const std::string sec = p.key.substr(0, dot);
+    if (sec != section) {
+      section = sec;
+      out += fmt::format("\n## `{}`\n\n| key | type | default | range | meaning |\n|---|---|---|---|---|\n", sec);
+    }
+    const char* kind = p.kind == ParamKind::Real      ? "real"
+                       : p.kind == ParamKind::Integer ? "integer"
+                       : p.kind == ParamKind::Boolean ? "boolean"
+                                                      : "text";
+    std::string range;
+    if (p.kind == ParamKind::Real || p.kind == ParamKind::Integer) {
+      const bool has_lo = p.min != -inf, has_hi = p.max != inf;
+      if (has_lo || has_hi)
+        range = fmt::format("{}{}, {}]", p.min_exclusive ? "(" : "[", has_lo ? fmt::format("{:g}", p.min) : "-inf",
+                            has_hi ? fmt::format("{:g}", p.max) : "inf");
+    } else if (!p.choices.empty()) {
+      for (const auto& c : p.choices) range += (range.empty() ? "" : ", ") + c;
+    }
+    out += fmt::format("| `{}` | {} | {} | {} | {} |\n", p.key.substr(dot + 1), kind,
+                       p.default_value ? "`" + *p.default_value + "`" : "**required**", range, p.doc);
+  }
+  return out;
+}
+
+}  // namespace fountain

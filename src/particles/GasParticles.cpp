@@ -1,0 +1,27 @@
+#include "particles/GasParticles.hpp"
+
+namespace fountain {
+
+namespace {
+template <class T>
+void apply(std::vector<T>& field, const std::vector<std::size_t>& order, std::vector<T>& scratch) {
+  scratch.resize(field.size());
+  for (std::size_t k = 0; k < order.size(); ++k) scratch[k] = field[order[k]];
+  field.swap(scratch);
+}
+}  // namespace
+
+void GasParticles::permute(const std::vector<std::size_t>& order) {
+  std::vector<double> sd;
+  std::vector<Vec3> sv;
+  std::vector<std::uint64_t> si;
+  std::vector<TimeBin> sb;
+  apply(id, order, si);
+  for (auto* f : {&mass, &u_full, &u, &h, &rho, &rho_msph, &h_msph, &wcount, &wcount_dh, &div_v,
+                  &balsara, &du_dt, &v_sig})
+    apply(*f, order, sd);
+  for (auto* f : {&x, &v_full, &v, &curl_v, &a_hydro}) apply(*f, order, sv);
+  apply(time_bin, order, sb);
+}
+
+}  // namespace fountain

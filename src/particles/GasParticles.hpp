@@ -1,0 +1,65 @@
+// Structure-of-arrays storage of the gas (SPH) particles, one vector per field.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "core/Vec3.hpp"
+
+namespace fountain {
+
+using TimeBin = std::int8_t;
+
+// Every field is a separate vector so a loop touches only what it needs. Positions and
+// velocities are physical in a non-cosmological run; in a comoving run they will be the
+// comoving position and the peculiar-velocity variable of the integrator.
+struct GasParticles {
+  // Identity and conserved state.
+  std::vector<std::uint64_t> id;
+  std::vector<double> mass;           // gas mass (what hydro sees)
+  std::vector<Vec3> x;                // position
+  std::vector<Vec3> v_full;           // integrated velocity (half-step after a first kick)
+  std::vector<double> u_full;         // integrated specific internal energy
+
+  // Predicted state: drifted to the current time, what neighbours read.
+  std::vector<Vec3> v;                // predicted velocity
+  std::vector<double> u;              // predicted specific internal energy
+  std::vector<double> h;              // smoothing length (compact support radius)
+  std::vector<double> rho;            // density
+
+  // What the MSPH rule reads: density and h as predicted at the start of the step, frozen
+  // while the density loop recomputes rho and h, so every loop decouples the same pairs.
+  std::vector<double> rho_msph;
+  std::vector<double> h_msph;
+
+  // Density-loop accumulators and results.
+  std::vector<double> wcount;         // (4 pi/3) h^3 sum W: the weighted neighbour number
+  std::vector<double> wcount_dh;      // d wcount / dh
+  std::vector<double> div_v;
+  std::vector<Vec3> curl_v;
+  std::vector<double> balsara;
+
+  // Force-loop results.
+  std::vector<Vec3> a_hydro;
+  std::vector<double> du_dt;
+  std::vector<double> v_sig;          // maximal signal velocity with a neighbour
+
+  // Time integration.
+  std::vector<TimeBin> time_bin;      // step length = 2^time_bin integer time units
+
+  std::size_t size() const { return id.size(); }
+
+  void resize(std::size_t n) {
+    id.resize(n); mass.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
+    v.resize(n); u.resize(n); h.resize(n); rho.resize(n);
+    rho_msph.resize(n); h_msph.resize(n);
+    wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n); balsara.resize(n);
+    a_hydro.resize(n); du_dt.resize(n); v_sig.resize(n);
+    time_bin.resize(n);
+  }
+
+  // Reorder every field by `order` (new index k holds old particle order[k]).
+  void permute(const std::vector<std::size_t>& order);
+};
+
+}  // namespace fountain

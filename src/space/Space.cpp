@@ -1,0 +1,226 @@
+#include "space/Space.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/Error.hpp"
+
+namespace fountain {
+
+namespace {
+constexpr int kMaxDepth = 24;
+}
+
+double Space::wrap_delta(double d, int dim) const {
+  if (!config_.periodic) return d;
+  const double L = size_[dim];
+  if (d > 0.5 * L) return d - L;
+  if (d < -0.5 * L) return d + L;
+  return d;
+}
+
+double Space::box_distance(const Cell& a, const Cell& b) const {
+  const Vec3 ca = a.centre(), cb = b.centre();
+  double d2 = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = std::fabs(wrap_delta(cb[k] - ca[k], k));
+    const double gap = std::max(0.0, d - 0.5 * (a.width[k] + b.width[k]));
+    d2 += gap * gap;
+  }
+  return std::sqrt(d2);
+}
+
+void Space::rebuild(GasParticles& gas) {
+  ++rebuilds_;
+  const std::size_t n = gas.size();
+  // The box.
+  if (config_.periodic) {
+    lo_ = {};
+    size_ = config_.box_size;
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        double& x = gas.x[i][k];
+        const double L = size_[k];
+        if (x < 0.0 || x >= L) x -= L * std::floor(x / L);
+        if (x >= L) x = 0.0;  // rounding of a tiny negative value
+      }
+  } else {
+    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (std::size_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], gas.x[i][k]);
+        hi[k] = std::max(hi[k], gas.x[i][k]);
+      }
+    if (n == 0) lo = hi = {};
+    double ext = 0.0;
+    for (int k = 0; k < 3; ++k) ext = std::max(ext, hi[k] - lo[k]);
+    if (ext == 0.0) ext = 1.0;
+    for (int k = 0; k < 3; ++k) {
+      const double e = std::max(hi[k] - lo[k], 1e-3 * ext) * (1.0 + 1e-6) + 1e-12 * ext;
+      lo_[k] = lo[k] - 0.5 * (e - (hi[k] - lo[k]));
+      size_[k] = e;
+    }
+  }
+
+  // Top-level grid.
+  std::array<int, 3> ntop{1, 1, 1};
+  {
+    const double longest = std::max({size_.x, size_.y, size_.z});
+    double w;
+    if (config_.top_cells > 0) {
+      w = longest / config_.top_cells;
+    } else {
+      const double volume = size_.x * size_.y * size_.z;
+      w = std::cbrt(volume * 4.0 * config_.split_size / std::max<double>(1.0, static_cast<double>(n)));
+    }
+    for (int k = 0; k < 3; ++k) ntop[k] = std::clamp(static_cast<int>(std::floor(size_[k] / w)), 1, 128);
+  }
+  const Vec3 wtop{size_.x / ntop[0], size_.y / ntop[1], size_.z / ntop[2]};
+  const std::size_t ntot = static_cast<std::size_t>(ntop[0]) * ntop[1] * ntop[2];
+
+  std::vector<std::size_t> key(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::array<int, 3> ix;
+    for (int k = 0; k < 3; ++k)
+      ix[k] = std::clamp(static_cast<int>(std::floor((gas.x[i][k] - lo_[k]) / wtop[k])), 0, ntop[k] - 1);
+    key[i] = (static_cast<std::size_t>(ix[0]) * ntop[1] + ix[1]) * ntop[2] + ix[2];
+  }
+  // Stable counting sort by top cell.
+  std::vector<std::size_t> start(ntot + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++start[key[i] + 1];
+  for (std::size_t c = 0; c < ntot; ++c) start[c + 1] += start[c];
+  std::vector<std::size_t> order(n), fill(start.begin(), start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) order[fill[key[i]]++] = i;
+
+  cells_.clear();
+  top_.clear();
+  for (int a = 0; a < ntop[0]; ++a)
+    for (int b = 0; b < ntop[1]; ++b)
+      for (int c = 0; c < ntop[2]; ++c) {
+        const std::size_t t = (static_cast<std::size_t>(a) * ntop[1] + b) * ntop[2] + c;
+        Cell cell;
+        cell.lo = lo_ + Vec3{a * wtop.x, b * wtop.y, c * wtop.z};
+        cell.width = wtop;
+        cell.first = start[t];
+        cell.count = start[t + 1] - start[t];
+        cells_.push_back(cell);
+        top_.push_back(static_cast<int>(cells_.size()) - 1);
+      }
+  // Positions are still in the original order: split reads them through `order`.
+  std::vector<std::size_t> scratch(n);
+  for (int t : top_) split(t, gas, order, scratch);
+  gas.permute(order);
+
+  // Leaves, their h_max and cover radii; inner nodes take the largest cover below them.
+  leaves_.clear();
+  leaf_slot_.assign(cells_.size(), -1);
+  double v_max_all = 0.0;
+  for (int c = static_cast<int>(cells_.size()) - 1; c >= 0; --c) {
+    Cell& cell = cells_[static_cast<std::size_t>(c)];
+    cell.dx_max = 0.0;
+    if (cell.leaf) {
+      cell.h_max = 0.0;
+      cell.v_max = 0.0;
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+        cell.h_max = std::max(cell.h_max, gas.h[i]);
+        cell.v_max = std::max(cell.v_max, norm(gas.v_full[i]));
+      }
+      cell.r_cover = (1.0 + config_.skin) * cell.h_max;
+      v_max_all = std::max(v_max_all, cell.v_max);
+    } else {
+      cell.r_cover = 0.0;
+      cell.h_max = 0.0;
+      for (int ch : cell.children)
+        if (ch >= 0) {
+          cell.r_cover = std::max(cell.r_cover, cells_[static_cast<std::size_t>(ch)].r_cover);
+          cell.h_max = std::max(cell.h_max, cells_[static_cast<std::size_t>(ch)].h_max);
+        }
+    }
+  }
+  for (int c = 0; c < static_cast<int>(cells_.size()); ++c)
+    if (cells_[static_cast<std::size_t>(c)].leaf && cells_[static_cast<std::size_t>(c)].count > 0) {
+      leaf_slot_[static_cast<std::size_t>(c)] = static_cast<int>(leaves_.size());
+      leaves_.push_back(c);
+    }
+
+  half_ = size_ * 0.5;
+  if (config_.periodic) {
+    // One image of each neighbour must suffice: the reach stays below half the box.
+    double reach = 0.0;
+    for (int c : leaves_) reach = std::max(reach, cells_[static_cast<std::size_t>(c)].r_cover);
+    const double half = 0.5 * std::min({size_.x, size_.y, size_.z});
+    if (reach >= half)
+      throw InputError(fmt::format(
+          "periodic box of size {} x {} x {} is too small for smoothing lengths up to {}: "
+          "use more particles or a smaller neighbour number",
+          size_.x, size_.y, size_.z, reach / (1.0 + config_.skin)));
+  }
+
+  neighbours_.assign(leaves_.size(), {});
+  for (std::size_t l = 0; l < leaves_.size(); ++l)
+    for (int t : top_) collect_neighbours(leaves_[l], t, neighbours_[l]);
+}
+
+void Space::split(int c, GasParticles& gas, std::vector<std::size_t>& order,
+                  std::vector<std::size_t>& scratch) {
+  const Cell cell = cells_[static_cast<std::size_t>(c)];
+  bool must_split = cell.count > static_cast<std::size_t>(config_.split_size);
+  if (config_.periodic && cell.count > 1) {
+    // Keep leaves small against the box so the nearest image of cell centres is that of their boxes.
+    for (int k = 0; k < 3; ++k) must_split = must_split || cell.width[k] > 0.25 * size_[k];
+  }
+  if (!must_split || cell.depth >= kMaxDepth) return;
+
+  const Vec3 mid = cell.centre();
+  std::array<std::size_t, 9> start{};
+  auto octant = [&](std::size_t i) {
+    const Vec3& x = gas.x[i];
+    return (x.x >= mid.x ? 4 : 0) + (x.y >= mid.y ? 2 : 0) + (x.z >= mid.z ? 1 : 0);
+  };
+  for (std::size_t k = cell.first; k < cell.first + cell.count; ++k) ++start[octant(order[k]) + 1];
+  for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
+  std::array<std::size_t, 8> fill;
+  for (int o = 0; o < 8; ++o) fill[o] = cell.first + start[o];
+  for (std::size_t k = cell.first; k < cell.first + cell.count; ++k) {
+    const std::size_t i = order[k];
+    scratch[fill[octant(i)]++] = i;
+  }
+  std::copy(scratch.begin() + static_cast<std::ptrdiff_t>(cell.first),
+            scratch.begin() + static_cast<std::ptrdiff_t>(cell.first + cell.count),
+            order.begin() + static_cast<std::ptrdiff_t>(cell.first));
+
+  cells_[static_cast<std::size_t>(c)].leaf = false;
+  for (int o = 0; o < 8; ++o) {
+    const std::size_t cnt = start[o + 1] - start[o];
+    if (cnt == 0) continue;
+    Cell child;
+    child.width = cell.width * 0.5;
+    child.lo = cell.lo + Vec3{(o & 4) ? child.width.x : 0.0, (o & 2) ? child.width.y : 0.0,
+                              (o & 1) ? child.width.z : 0.0};
+    child.first = cell.first + start[o];
+    child.count = cnt;
+    child.parent = c;
+    child.depth = cell.depth + 1;
+    cells_.push_back(child);
+    const int id = static_cast<int>(cells_.size()) - 1;
+    cells_[static_cast<std::size_t>(c)].children[o] = id;
+    split(id, gas, order, scratch);
+  }
+}
+
+void Space::collect_neighbours(int leaf, int node, std::vector<int>& out) const {
+  const Cell& a = cells_[static_cast<std::size_t>(leaf)];
+  const Cell& b = cells_[static_cast<std::size_t>(node)];
+  if (b.count == 0) return;
+  if (box_distance(a, b) >= std::max(a.r_cover, b.r_cover)) return;
+  if (b.leaf) {
+    if (node != leaf) out.push_back(node);
+    return;
+  }
+  for (int ch : b.children)
+    if (ch >= 0) collect_neighbours(leaf, ch, out);
+}
+
+}  // namespace fountain

@@ -1,0 +1,69 @@
+// The domain: a top-level grid of cells, each split into an octree, and neighbour-cell lists.
+#pragma once
+#include <vector>
+
+#include "core/Vec3.hpp"
+#include "particles/GasParticles.hpp"
+#include "space/Cell.hpp"
+
+namespace fountain {
+
+struct SpaceConfig {
+  bool periodic = false;
+  Vec3 box_size;            // periodic box (ignored for open boundaries)
+  int split_size = 64;      // octree leaves hold at most this many particles
+  int top_cells = 0;        // top-level cells along the longest side; 0 = automatic
+  double skin = 0.25;       // leaves cover (1 + skin) h_max
+};
+
+class Space {
+ public:
+  explicit Space(SpaceConfig config) : config_(config) {}
+
+  // Sorts the particles into cells (every field permuted), builds the octree, the leaves'
+  // cover radii and their neighbour lists. Positions are wrapped into a periodic box.
+  void rebuild(GasParticles& gas);
+
+  const std::vector<Cell>& cells() const { return cells_; }
+  std::vector<Cell>& cells() { return cells_; }
+  Cell& cell(int c) { return cells_[static_cast<std::size_t>(c)]; }
+  const Cell& cell(int c) const { return cells_[static_cast<std::size_t>(c)]; }
+  const std::vector<int>& leaves() const { return leaves_; }
+  // Leaves whose particles may interact with those of leaf `c` (not `c` itself), in a fixed order.
+  const std::vector<int>& neighbours(int c) const { return neighbours_[static_cast<std::size_t>(leaf_slot_[static_cast<std::size_t>(c)])]; }
+  // The separation a - b of two positions, as its nearest periodic image.
+  Vec3 separation(const Vec3& a, const Vec3& b) const {
+    Vec3 d = a - b;
+    if (config_.periodic)
+      for (int k = 0; k < 3; ++k) {
+        if (d[k] > half_[k]) d[k] -= size_[k];
+        else if (d[k] < -half_[k]) d[k] += size_[k];
+      }
+    return d;
+  }
+
+  const SpaceConfig& config() const { return config_; }
+  bool periodic() const { return config_.periodic; }
+  const Vec3& box_lo() const { return lo_; }
+  const Vec3& box_size() const { return size_; }
+  int rebuild_count() const { return rebuilds_; }
+
+  // Distance between the boxes of two cells (nearest periodic image).
+  double box_distance(const Cell& a, const Cell& b) const;
+
+ private:
+  void split(int c, GasParticles& gas, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch);
+  void collect_neighbours(int leaf, int node, std::vector<int>& out) const;
+  double wrap_delta(double d, int dim) const;
+
+  SpaceConfig config_;
+  Vec3 lo_, size_, half_;
+  std::vector<Cell> cells_;
+  std::vector<int> top_;
+  std::vector<int> leaves_;
+  std::vector<int> leaf_slot_;
+  std::vector<std::vector<int>> neighbours_;
+  int rebuilds_ = 0;
+};
+
+}  // namespace fountain

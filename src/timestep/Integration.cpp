@@ -1,0 +1,111 @@
+#include "timestep/Integration.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/Error.hpp"
+#include "hydro/HydroIact.hpp"
+
+namespace fountain::integration {
+
+namespace {
+
+// exp(x), with the argument kept small: drifting h and rho is a prediction, not a law.
+double bounded_exp(double x) { return std::exp(std::clamp(x, -0.2, 0.2)); }
+
+// u after a kick, never dropping by more than half in one kick (as GADGET does).
+double kicked_energy(double u, double du_dt, double dt) {
+  const double next = u + du_dt * dt;
+  return next < 0.5 * u ? 0.5 * u : next;
+}
+
+}  // namespace
+
+void drift(StepContext& ctx, int c) {
+  GasParticles& gas = ctx.gas;
+  Cell& cell = ctx.space.cell(c);
+  const double dt = ctx.timeline.drift_factor(cell.ti_drift, ctx.ti_current);
+  double h_max = 0.0;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (dt != 0.0) {
+      gas.x[i] += gas.v_full[i] * dt;
+      gas.v[i] += gas.a_hydro[i] * dt;
+      gas.u[i] = kicked_energy(gas.u[i], gas.du_dt[i], dt);
+      gas.h[i] *= bounded_exp(gas.div_v[i] * dt / 3.0);
+      gas.rho[i] *= bounded_exp(-gas.div_v[i] * dt);
+    }
+    gas.rho_msph[i] = gas.rho[i];
+    gas.h_msph[i] = gas.h[i];
+    h_max = std::max(h_max, gas.h[i]);
+  }
+  cell.dx_max += cell.v_max * std::fabs(dt);
+  cell.ti_drift = ctx.ti_current;
+  cell.h_max = h_max;
+  if (h_max + cell.dx_max + ctx.dx_bound > cell.r_cover) ctx.cover_exceeded = true;
+}
+
+void kick_close(StepContext& ctx, int c) {
+  GasParticles& gas = ctx.gas;
+  const Cell& cell = ctx.space.cell(c);
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (!ctx.is_active(i)) continue;
+    if (!ctx.first_step) {
+      const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
+      gas.v_full[i] += gas.a_hydro[i] * dt;
+      gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
+    }
+    gas.v[i] = gas.v_full[i];
+    gas.u[i] = gas.u_full[i];
+  }
+}
+
+void timestep(StepContext& ctx, int c) {
+  GasParticles& gas = ctx.gas;
+  Cell& cell = ctx.space.cell(c);
+  const HydroParams& p = ctx.hydro;
+  const int max_bin = std::min(ctx.timeline.bin_for(ctx.integration.dt_max),
+                               TimeLine::largest_aligned_bin(ctx.ti_current));
+  IntegerTime ti_end_min = TimeLine::ticks;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (ctx.is_active(i)) {
+      const double rho = gas.rho[i], u = gas.u[i];
+      if (!std::isfinite(rho) || !std::isfinite(u) || !std::isfinite(gas.du_dt[i]) ||
+          !std::isfinite(norm(gas.a_hydro[i])) || !std::isfinite(norm(gas.x[i])))
+        throw InputError(fmt::format("gas particle id {} has a non-finite state at t = {} "
+                                     "(rho = {}, u = {}, du/dt = {}, |a| = {})",
+                                     gas.id[i], ctx.timeline.time(ctx.ti_current), rho, u,
+                                     gas.du_dt[i], norm(gas.a_hydro[i])));
+      const double cs = hydro::sound_speed(rho, u, p.gamma);
+      const double dt = hydro::courant_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), p);
+      if (dt < ctx.integration.dt_min)
+        throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {}",
+                                     gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
+      int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
+      if (bin < 0)
+        throw InputError(fmt::format("gas particle id {} needs a timestep {} shorter than one tick of the timeline",
+                                     gas.id[i], dt));
+      gas.time_bin[i] = static_cast<TimeBin>(bin);
+    }
+    ti_end_min = std::min(ti_end_min, TimeLine::step_end(gas.time_bin[i], ctx.ti_current));
+  }
+  cell.ti_end_min = ti_end_min;
+}
+
+void kick_open(StepContext& ctx, int c) {
+  GasParticles& gas = ctx.gas;
+  Cell& cell = ctx.space.cell(c);
+  double v_max = 0.0;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (ctx.is_active(i)) {
+      const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
+      gas.v_full[i] += gas.a_hydro[i] * dt;
+      gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
+    }
+    v_max = std::max(v_max, norm(gas.v_full[i]));
+  }
+  cell.v_max = v_max;
+}
+
+}  // namespace fountain::integration

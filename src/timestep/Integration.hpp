@@ -1,0 +1,20 @@
+// Drift, kick and timestep of the particles of one cell (leapfrog KDK, individual steps).
+#pragma once
+#include "engine/StepContext.hpp"
+
+namespace fountain::integration {
+
+// Predicts every particle of the cell to the current time: positions, velocities,
+// internal energy, h and density; freezes what the MSPH rule will read this step.
+void drift(StepContext& ctx, int c);
+
+// Closes the step of each active particle with its second half-kick.
+void kick_close(StepContext& ctx, int c);
+
+// New time bins for the active particles (Courant criterion, dt_max, alignment).
+void timestep(StepContext& ctx, int c);
+
+// Opens the new step of each active particle with its first half-kick.
+void kick_open(StepContext& ctx, int c);
+
+}  // namespace fountain::integration

@@ -1,0 +1,69 @@
+// A dependency graph of typed tasks over cells; knows no physics, only tasks and resources.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace fountain::tasks {
+
+// Task types are registered once, by whoever builds graphs; the graph stores only indices.
+struct TaskTypeInfo {
+  std::string name;      // e.g. "density"
+  std::string subtype;   // e.g. "self" or "pair"; may be empty
+  std::string category;  // coarse group for reports: "hydro", "gravity", "integration", ...
+};
+
+class TaskTypeRegistry {
+ public:
+  int add(TaskTypeInfo info) {
+    types_.push_back(std::move(info));
+    return static_cast<int>(types_.size()) - 1;
+  }
+  const TaskTypeInfo& operator[](int t) const { return types_[static_cast<std::size_t>(t)]; }
+  int size() const { return static_cast<int>(types_.size()); }
+  std::string full_name(int t) const {
+    const auto& i = (*this)[t];
+    return i.subtype.empty() ? i.name : i.name + "_" + i.subtype;
+  }
+
+ private:
+  std::vector<TaskTypeInfo> types_;
+};
+
+struct Task {
+  int type = -1;
+  int ci = -1;          // the cell the task works on (and writes, if `writes` says so)
+  int cj = -1;          // the other cell of a pair task, read only
+  int writes = -1;      // the one resource (cell) the task writes; -1 for none
+  bool active = true;   // skipped tasks count as done at once
+  std::vector<int> unlocks;  // tasks that wait for this one
+};
+
+// Tasks plus dependencies. Every task that writes a resource is chained, in insertion
+// order, after the previous task writing the same resource: no two tasks ever write one
+// cell at once, and each cell's updates always happen in the same order, so floating-point
+// sums are reproducible whatever the number of threads.
+class TaskGraph {
+ public:
+  int add(int type, int ci, int cj = -1, int writes = -1);
+  // `after` may start only when `before` has finished.
+  void depends(int before, int after);
+  // Adds the per-resource chains; call once after the last add().
+  void finalize();
+
+  const std::vector<Task>& tasks() const { return tasks_; }
+  Task& task(int t) { return tasks_[static_cast<std::size_t>(t)]; }
+  const Task& task(int t) const { return tasks_[static_cast<std::size_t>(t)]; }
+  int size() const { return static_cast<int>(tasks_.size()); }
+  bool finalized() const { return finalized_; }
+  void set_all_active(bool a) {
+    for (auto& t : tasks_) t.active = a;
+  }
+  std::size_t num_dependencies() const;
+
+ private:
+  std::vector<Task> tasks_;
+  bool finalized_ = false;
+};
+
+}  // namespace fountain::tasks

@@ -1,0 +1,44 @@
+// Small particle sets and run configurations shared by the tests.
+#pragma once
+#include <random>
+
+#include "engine/RunConfig.hpp"
+#include "particles/GasParticles.hpp"
+
+namespace fountain::test {
+
+inline RunConfig test_config(bool periodic, const Vec3& box, bool msph, int threads = 2) {
+  RunConfig c;
+  c.t_begin = 0.0;
+  c.t_end = 1.0;
+  c.threads = threads;
+  c.hydro.msph = msph;
+  c.hydro.neighbours = 32;
+  c.hydro.neighbours_tolerance = 1e-6;
+  c.hydro.max_h_iterations = 100;
+  c.integration.dt_min = 1e-12;
+  c.integration.dt_max = 1e-2;
+  c.space.periodic = periodic;
+  c.space.box_size = box;
+  c.space.split_size = 32;
+  return c;
+}
+
+// n particles uniformly at random in [lo, lo + size), random velocities and energies.
+inline void add_random(GasParticles& g, std::size_t n, const Vec3& lo, const Vec3& size, double mass, double u,
+                       double v_scale, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const std::size_t start = g.size();
+  g.resize(start + n);
+  for (std::size_t k = start; k < start + n; ++k) {
+    g.id[k] = k + 1;
+    g.mass[k] = mass;
+    g.x[k] = lo + Vec3{U(rng) * size.x, U(rng) * size.y, U(rng) * size.z};
+    g.v[k] = g.v_full[k] = Vec3{U(rng) - 0.5, U(rng) - 0.5, U(rng) - 0.5} * v_scale;
+    g.u[k] = g.u_full[k] = u * (0.5 + U(rng));
+    g.h[k] = 0.0;
+    g.time_bin[k] = 0;
+  }
+}
+
+}  // namespace fountain::test

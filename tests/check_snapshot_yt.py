@@ -1,0 +1,83 @@
+#!/usr/bin/python3
+"""Check that yt opens a Fountain snapshot and sees the same gas mass as h5py.
+
+Usage: check_snapshot_yt.py SNAPSHOT.hdf5
+
+yt recognises Fountain snapshots with its GADGET HDF5 frontend (GadgetHDF5Dataset; see the
+comment at the top of io/Snapshot.cpp for why not the SWIFT one). That frontend ignores
+/Units, so the units are passed as unit_base from the GADGET-named attributes in /Units.
+Prints OK and exits 0 when the total gas mass agrees to 1e-10 (relative), else prints the
+difference and exits 1.
+"""
+import logging
+import os
+import sys
+import tempfile
+import warnings
+
+
+def main(argv):
+    if len(argv) != 2:
+        print(f"usage: {argv[0]} SNAPSHOT.hdf5", file=sys.stderr)
+        return 2
+    path = argv[1]
+
+    warnings.simplefilter("ignore")
+    import h5py
+    import numpy as np
+    import yt
+
+    yt.set_log_level(50)
+    logging.getLogger("yt").setLevel(logging.CRITICAL)
+
+    try:
+        with h5py.File(path, "r") as f:
+            masses = np.asarray(f["/PartType0/Masses"][...], dtype=np.float64)
+            units = dict(f["/Units"].attrs)
+            box = np.ravel(f["/Header"].attrs["BoxSize"]).astype(np.float64)
+        length_cgs = float(np.ravel(units["Unit length in cgs (U_L)"])[0])
+        mass_cgs = float(np.ravel(units["Unit mass in cgs (U_M)"])[0])
+        time_cgs = float(np.ravel(units["Unit time in cgs (U_t)"])[0])
+    except Exception as e:  # noqa: BLE001 -- not a Fountain snapshot
+        print(f"FAIL: h5py cannot read /PartType0/Masses and /Units from {path}: {type(e).__name__}: {e}")
+        return 1
+    unit_base = {
+        "UnitLength_in_cm": length_cgs,
+        "UnitMass_in_g": mass_cgs,
+        "UnitVelocity_in_cm_per_s": length_cgs / time_cgs,
+    }
+    expected_g = float(np.sum(masses)) * mass_cgs
+    extra = {}
+    if box.size == 3:
+        # A non-cubic box: yt's GADGET reader only understands a scalar BoxSize.
+        extra["bounding_box"] = [[0.0, box[0]], [0.0, box[1]], [0.0, box[2]]]
+
+    # Keep yt's index file out of the snapshot folder.
+    with tempfile.TemporaryDirectory() as tmp:
+        index = os.path.join(tmp, os.path.basename(path) + ".ewah")
+        try:
+            ds = yt.load(path, unit_base=unit_base, index_filename=index, **extra)
+        except Exception as e:  # noqa: BLE001 -- any failure to load is the answer
+            print(f"FAIL: yt cannot load {path}: {type(e).__name__}: {e}")
+            return 1
+        ad = ds.all_data()
+        try:
+            total = ad["gas", "mass"].sum()
+        except Exception:  # noqa: BLE001 -- fall back to the raw particle field
+            total = ad["PartType0", "Masses"].sum()
+        got_g = float(total.in_cgs())
+        frontend = type(ds).__name__
+
+    rel = abs(got_g - expected_g) / abs(expected_g) if expected_g != 0 else abs(got_g)
+    if rel <= 1e-10:
+        print(f"OK ({frontend}: {masses.size} gas particles, total mass {got_g:.12e} g)")
+        return 0
+    print(
+        f"FAIL ({frontend}): yt total gas mass {got_g:.17e} g, h5py {expected_g:.17e} g, "
+        f"relative difference {rel:.3e}"
+    )
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,474 @@
+// Tests of the task-graph writers (dependency CSV, DOT, timeline CSV) and of the ordering
+// guarantees of tasks::Executor that the timelines rely on.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/Error.hpp"
+#include "tasks/Executor.hpp"
+#include "tasks/TaskGraph.hpp"
+#include "tasks/TaskGraphDump.hpp"
+
+namespace fs = std::filesystem;
+using fountain::tasks::Executor;
+using fountain::tasks::Task;
+using fountain::tasks::TaskGraph;
+using fountain::tasks::TaskRecord;
+using fountain::tasks::TaskTypeRegistry;
+
+namespace {
+
+// A fresh directory under the system temp dir, removed again at the end of the test.
+class TempDir {
+ public:
+  TempDir() {
+    std::random_device rd;
+    const auto stamp = std::chrono::steady_clock::now().time_since_epoch().count();
+    for (int attempt = 0; attempt < 100; ++attempt) {
+      path_ = fs::temp_directory_path() /
+              ("fountain_task_dumps_" + std::to_string(stamp) + "_" + std::to_string(rd()));
+      if (fs::create_directory(path_)) return;
+    }
+    throw std::runtime_error("cannot create a temporary directory");
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  fs::path path_;
+};
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.is_open()) << path;
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) lines.push_back(l);
+  return lines;
+}
+
+std::string read_all(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> split_csv(const std::string& line) {
+  std::vector<std::string> f;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      f.push_back(cur);
+      cur.clear();
+    } else {
+      cur.push_back(c);
+    }
+  }
+  f.push_back(cur);
+  return f;
+}
+
+int column(const std::vector<std::string>& header, const std::string& name) {
+  const auto it = std::find(header.begin(), header.end(), name);
+  return it == header.end() ? -1 : static_cast<int>(it - header.begin());
+}
+
+void spin_for(std::chrono::microseconds d) {
+  const auto until = std::chrono::steady_clock::now() + d;
+  while (std::chrono::steady_clock::now() < until) {
+  }
+}
+
+// Index of `t` in `g` (the runner only gets the task).
+int index_of(const TaskGraph& g, const Task& t) { return static_cast<int>(&t - g.tasks().data()); }
+
+// A small hydro-like step on three cells:
+//   density_self on cells 0,1,2; density_pair on (0,1) and (1,2); kick on 0,1,2;
+//   one "timer" task with no dependencies at all; and a registered "gravity" type without tasks.
+struct SmallStep {
+  TaskTypeRegistry types;
+  TaskGraph graph;
+  int self_t = -1, pair_t = -1, kick_t = -1, grav_t = -1, timer_t = -1;
+  int s0 = -1, s1 = -1, s2 = -1, p01 = -1, p12 = -1, k0 = -1, k1 = -1, k2 = -1, timer = -1;
+
+  SmallStep() {
+    self_t = types.add({"density", "self", "hydro"});
+    pair_t = types.add({"density", "pair", "hydro"});
+    kick_t = types.add({"kick", "", "integration"});
+    grav_t = types.add({"grav", "self", "gravity"});
+    timer_t = types.add({"timer", "", "misc"});
+
+    s0 = graph.add(self_t, 0, -1, 0);
+    s1 = graph.add(self_t, 1, -1, 1);
+    s2 = graph.add(self_t, 2, -1, 2);
+    p01 = graph.add(pair_t, 0, 1, 0);  // chained after s0 (writes cell 0)
+    p12 = graph.add(pair_t, 1, 2, 1);  // chained after s1 (writes cell 1)
+    graph.depends(s1, p01);            // reads cell 1
+    graph.depends(s2, p12);            // reads cell 2
+    k0 = graph.add(kick_t, 0, -1, 0);  // chained after p01
+    k1 = graph.add(kick_t, 1, -1, 1);  // chained after p12
+    k2 = graph.add(kick_t, 2, -1, 2);  // chained after s2
+    graph.depends(p01, k1);
+    timer = graph.add(timer_t, -1);
+    graph.finalize();
+  }
+};
+
+}  // namespace
+
+TEST(TaskDumps, SmallStepHasTheExpectedDependencies) {
+  SmallStep s;
+  EXPECT_EQ(s.graph.size(), 9);
+  EXPECT_EQ(s.graph.num_dependencies(), 8u);
+}
+
+TEST(TaskDumps, DependencyCsvMatchesSwiftFormat) {
+  SmallStep s;
+  TempDir dir;
+  const std::string path = dir.file("dependency_graph_0.csv");
+  fountain::tasks::write_dependency_csv(s.graph, s.types, path);
+
+  const auto lines = read_lines(path);
+  ASSERT_GE(lines.size(), 2u);
+  // SWIFT's plot_task_dependencies.py takes the first line, when it starts with '#', as the version.
+  ASSERT_FALSE(lines[0].empty());
+  EXPECT_EQ(lines[0].substr(0, 2), "# ");
+  EXPECT_EQ(lines[1],
+            "task_in,task_out,implicit_in,implicit_out,mpi_in,mpi_out,cluster_in,cluster_out,"
+            "number_link,number_rank,task_in_is_top,task_in_is_hydro_super,task_in_is_grav_super,"
+            "task_out_is_top,task_out_is_hydro_super,task_out_is_grav_super,cell_has_active_task");
+  const auto header = split_csv(lines[1]);
+  ASSERT_EQ(header.size(), 17u);
+
+  // Three type-to-type links plus one row for the timer, which neither unlocks nor waits.
+  ASSERT_EQ(lines.size(), 2u + 4u);
+  std::map<std::pair<std::string, std::string>, std::vector<std::string>> rows;
+  std::size_t total_links = 0;
+  for (std::size_t i = 2; i < lines.size(); ++i) {
+    const auto f = split_csv(lines[i]);
+    ASSERT_EQ(f.size(), header.size()) << lines[i];
+    const auto key = std::make_pair(f[0], f[1]);
+    EXPECT_EQ(rows.count(key), 0u) << "duplicate row " << lines[i];
+    rows[key] = f;
+    total_links += std::stoul(f[static_cast<std::size_t>(column(header, "number_link"))]);
+  }
+  EXPECT_EQ(total_links, s.graph.num_dependencies());
+
+  const auto link = static_cast<std::size_t>(column(header, "number_link"));
+  const auto cl_in = static_cast<std::size_t>(column(header, "cluster_in"));
+  const auto cl_out = static_cast<std::size_t>(column(header, "cluster_out"));
+  const auto rank = static_cast<std::size_t>(column(header, "number_rank"));
+  const auto impl = static_cast<std::size_t>(column(header, "implicit_in"));
+  const auto mpi = static_cast<std::size_t>(column(header, "mpi_out"));
+
+  const std::pair<std::string, std::string> sp{"density_self", "density_pair"};
+  const std::pair<std::string, std::string> pk{"density_pair", "kick"};
+  const std::pair<std::string, std::string> sk{"density_self", "kick"};
+  const std::pair<std::string, std::string> tn{"timer", "task_unlocks_nothing"};
+  ASSERT_EQ(rows.count(sp), 1u);
+  ASSERT_EQ(rows.count(pk), 1u);
+  ASSERT_EQ(rows.count(sk), 1u);
+  ASSERT_EQ(rows.count(tn), 1u);
+  EXPECT_EQ(rows[sp][link], "4");
+  EXPECT_EQ(rows[pk][link], "3");
+  EXPECT_EQ(rows[sk][link], "1");
+  EXPECT_EQ(rows[tn][link], "0");
+
+  EXPECT_EQ(rows[sp][cl_in], "hydro");
+  EXPECT_EQ(rows[sp][cl_out], "hydro");
+  EXPECT_EQ(rows[pk][cl_out], "integration");
+  EXPECT_EQ(rows[tn][cl_in], "misc");
+  EXPECT_EQ(rows[tn][cl_out], "None");
+  for (const auto& [key, f] : rows) {
+    EXPECT_EQ(f[rank], "1") << key.first;
+    EXPECT_EQ(f[impl], "0") << key.first;
+    EXPECT_EQ(f[mpi], "0") << key.first;
+    // The type without tasks never appears.
+    EXPECT_NE(key.first, "grav_self");
+    EXPECT_NE(key.second, "grav_self");
+  }
+}
+
+TEST(TaskDumps, DotHasOneNodePerUsedTypeAndCountedEdges) {
+  SmallStep s;
+  TempDir dir;
+  const std::string path = dir.file("tasks.dot");
+  fountain::tasks::write_dot(s.graph, s.types, path);
+  const std::string dot = read_all(path);
+
+  EXPECT_EQ(dot.rfind("digraph", 0), 0u) << dot;
+  EXPECT_NE(dot.find('}'), std::string::npos);
+  EXPECT_NE(dot.find("\"density_self\" [label=\"density_self\\n3 tasks\""), std::string::npos) << dot;
+  EXPECT_NE(dot.find("\"density_pair\" [label=\"density_pair\\n2 tasks\""), std::string::npos) << dot;
+  EXPECT_NE(dot.find("\"kick\" [label=\"kick\\n3 tasks\""), std::string::npos) << dot;
+  EXPECT_NE(dot.find("\"timer\" [label=\"timer\\n1 tasks\""), std::string::npos) << dot;
+  EXPECT_EQ(dot.find("grav_self"), std::string::npos) << dot;
+
+  EXPECT_NE(dot.find("\"density_self\" -> \"density_pair\" [label=\"4\"]"), std::string::npos) << dot;
+  EXPECT_NE(dot.find("\"density_pair\" -> \"kick\" [label=\"3\"]"), std::string::npos) << dot;
+  EXPECT_NE(dot.find("\"density_self\" -> \"kick\" [label=\"1\"]"), std::string::npos) << dot;
+  std::size_t arrows = 0;
+  for (std::size_t p = dot.find("->"); p != std::string::npos; p = dot.find("->", p + 2)) ++arrows;
+  EXPECT_EQ(arrows, 3u);
+
+  // Nodes of one category share a colour; different categories get different ones.
+  auto colour = [&](const std::string& node) {
+    const auto p = dot.find("\"" + node + "\" [label=");
+    if (p == std::string::npos) return std::string();
+    const auto c = dot.find("fillcolor=\"", p);
+    const auto e = dot.find('"', c + 11);
+    return dot.substr(c + 11, e - c - 11);
+  };
+  EXPECT_FALSE(colour("density_self").empty());
+  EXPECT_EQ(colour("density_self"), colour("density_pair"));
+  EXPECT_NE(colour("density_self"), colour("kick"));
+  EXPECT_NE(colour("kick"), colour("timer"));
+}
+
+TEST(TaskDumps, TimelineHasOneRowPerActiveTask) {
+  SmallStep s;
+  s.graph.task(s.k2).active = false;
+
+  Executor exec(2);
+  std::vector<TaskRecord> records;
+  std::atomic<int> ran{0};
+  exec.run(
+      s.graph,
+      [&](const Task&) {
+        spin_for(std::chrono::microseconds(50));
+        ++ran;
+      },
+      &records);
+  ASSERT_EQ(ran.load(), 8);
+  ASSERT_EQ(records.size(), 9u);
+  EXPECT_EQ(records[static_cast<std::size_t>(s.k2)].thread, -1);
+
+  TempDir dir;
+  const std::string path = dir.file("timeline_step7_rank0.csv");
+  fountain::tasks::write_timeline_csv(s.graph, s.types, records, /*rank=*/0, /*step=*/7, path);
+  const auto lines = read_lines(path);
+  ASSERT_GE(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "# fountain task timeline: step=7 rank=0");
+  EXPECT_EQ(lines[1], "type,subtype,category,ci,cj,rank,thread,start_ns,end_ns");
+  ASSERT_EQ(lines.size(), 2u + 8u);
+
+  std::map<std::string, int> per_type;
+  for (std::size_t i = 2; i < lines.size(); ++i) {
+    const auto f = split_csv(lines[i]);
+    ASSERT_EQ(f.size(), 9u) << lines[i];
+    per_type[f[1].empty() ? f[0] : f[0] + "_" + f[1]]++;
+    EXPECT_EQ(f[5], "0");
+    const int thread = std::stoi(f[6]);
+    EXPECT_GE(thread, 0);
+    EXPECT_LT(thread, 2);
+    const long long start = std::stoll(f[7]);
+    const long long end = std::stoll(f[8]);
+    EXPECT_GE(start, 0);
+    EXPECT_LE(start, end) << lines[i];
+    if (f[0] == "density" && f[1] == "pair") {
+      EXPECT_NE(f[4], "-1");
+    }
+    if (f[0] == "kick") {
+      EXPECT_EQ(f[2], "integration");
+    }
+  }
+  EXPECT_EQ(per_type["density_self"], 3);
+  EXPECT_EQ(per_type["density_pair"], 2);
+  EXPECT_EQ(per_type["kick"], 2);  // k2 was inactive
+  EXPECT_EQ(per_type["timer"], 1);
+  EXPECT_EQ(per_type.count("grav_self"), 0u);
+}
+
+TEST(TaskDumps, UnwritablePathThrowsInputErrorNamingIt) {
+  SmallStep s;
+  TempDir dir;
+  const std::string bad = dir.file("no_such_dir/out.csv");
+  std::vector<TaskRecord> records(static_cast<std::size_t>(s.graph.size()));
+  auto expect_names_path = [&](auto&& call) {
+    try {
+      call();
+      ADD_FAILURE() << "no exception for " << bad;
+    } catch (const fountain::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  };
+  expect_names_path([&] { fountain::tasks::write_dependency_csv(s.graph, s.types, bad); });
+  expect_names_path([&] { fountain::tasks::write_dot(s.graph, s.types, bad); });
+  expect_names_path([&] { fountain::tasks::write_timeline_csv(s.graph, s.types, records, 0, 0, bad); });
+}
+
+TEST(Executor, ChainOnOneResourceRunsInInsertionOrder) {
+  TaskTypeRegistry types;
+  const int work = types.add({"work", "", "test"});
+  const int other = types.add({"other", "", "test"});
+  TaskGraph g;
+  constexpr int n = 200;
+  std::vector<int> chain;
+  for (int i = 0; i < n; ++i) {
+    chain.push_back(g.add(work, 0, -1, /*writes=*/0));
+    g.add(other, 1 + i, -1, /*writes=*/1 + i);  // independent work to keep both threads busy
+  }
+  g.finalize();
+
+  Executor exec(2);
+  for (int repeat = 0; repeat < 20; ++repeat) {
+    // Only chained tasks touch `seen`, and they never overlap, so it needs no lock. The relaxed
+    // flag only turns a broken executor's overlap into a clean failure instead of a corrupted
+    // heap; it adds no ordering, so a thread sanitizer still checks the executor's own.
+    std::vector<int> seen;
+    std::atomic<bool> inside{false};
+    std::atomic<int> overlaps{0};
+    exec.run(g, [&](const Task& t) {
+      if (t.type != work) return;
+      if (inside.exchange(true, std::memory_order_relaxed)) {
+        overlaps.fetch_add(1, std::memory_order_relaxed);
+        return;
+      }
+      seen.push_back(index_of(g, t));
+      inside.store(false, std::memory_order_relaxed);
+    });
+    EXPECT_EQ(overlaps.load(), 0) << "two tasks writing one resource ran at once";
+    EXPECT_EQ(seen, chain);
+  }
+}
+
+TEST(Executor, EveryActiveTaskRunsExactlyOnce) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  TaskGraph g;
+  // Short chains on a few resources plus some free tasks: many tasks become ready while the
+  // first ones are still being spawned.
+  for (int i = 0; i < 2000; ++i) g.add(ty, i, -1, i % 3 == 0 ? -1 : i % 7);
+  g.finalize();
+  for (int i = 0; i < g.size(); i += 11) g.task(i).active = false;
+
+  Executor exec(2);
+  for (int repeat = 0; repeat < 20; ++repeat) {
+    std::vector<std::atomic<int>> runs(static_cast<std::size_t>(g.size()));
+    for (auto& r : runs) r.store(0);
+    std::vector<TaskRecord> rec;
+    exec.run(g, [&](const Task& t) { runs[static_cast<std::size_t>(index_of(g, t))].fetch_add(1); }, &rec);
+    for (int i = 0; i < g.size(); ++i) {
+      const bool active = g.task(i).active;
+      ASSERT_EQ(runs[static_cast<std::size_t>(i)].load(), active ? 1 : 0) << "task " << i << ", repeat " << repeat;
+      EXPECT_EQ(rec[static_cast<std::size_t>(i)].thread >= 0, active) << "task " << i;
+    }
+  }
+}
+
+TEST(Executor, DiamondNeverStartsBeforeItsPredecessorsEnd) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"node", "", "test"});
+  TaskGraph g;
+  // Many diamonds a -> {b, c} -> d side by side, each stage a little slow.
+  constexpr int diamonds = 50;
+  std::vector<std::pair<int, int>> edges;
+  for (int k = 0; k < diamonds; ++k) {
+    const int a = g.add(ty, k);
+    const int b = g.add(ty, k);
+    const int c = g.add(ty, k);
+    const int d = g.add(ty, k);
+    const std::pair<int, int> diamond[] = {{a, b}, {a, c}, {b, d}, {c, d}};
+    for (auto [x, y] : diamond) {
+      g.depends(x, y);
+      edges.emplace_back(x, y);
+    }
+  }
+  g.finalize();
+
+  Executor exec(2);
+  std::vector<TaskRecord> rec;
+  exec.run(g, [](const Task&) { spin_for(std::chrono::microseconds(20)); }, &rec);
+  ASSERT_EQ(rec.size(), static_cast<std::size_t>(g.size()));
+  for (const auto& r : rec) {
+    EXPECT_GE(r.thread, 0);
+    EXPECT_LE(r.start_ns, r.end_ns);
+  }
+  for (auto [x, y] : edges)
+    EXPECT_GE(rec[static_cast<std::size_t>(y)].start_ns, rec[static_cast<std::size_t>(x)].end_ns)
+        << "task " << y << " started before its predecessor " << x << " ended";
+}
+
+TEST(Executor, InactiveTaskInAChainPassesTheOrderOn) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"step", "", "test"});
+  TaskGraph g;
+  constexpr int chains = 8, length = 30;
+  std::vector<std::vector<int>> tasks_of(chains);
+  for (int i = 0; i < length; ++i)
+    for (int c = 0; c < chains; ++c) tasks_of[c].push_back(g.add(ty, c, -1, /*writes=*/c));
+  g.finalize();
+  // Switch off a task in the middle of every chain (and two in a row in chain 0).
+  for (int c = 0; c < chains; ++c) g.task(tasks_of[c][length / 2]).active = false;
+  g.task(tasks_of[0][length / 2 + 1]).active = false;
+
+  std::vector<std::vector<int>> seen(chains);  // one vector per chain: no two writers at once
+  std::vector<std::atomic<bool>> inside(chains);   // relaxed overlap guard, as above
+  for (auto& b : inside) b.store(false);
+  std::atomic<int> overlaps{0};
+  Executor exec(2);
+  std::vector<TaskRecord> rec;
+  exec.run(
+      g,
+      [&](const Task& t) {
+        const auto c = static_cast<std::size_t>(t.writes);
+        if (inside[c].exchange(true, std::memory_order_relaxed)) {
+          overlaps.fetch_add(1, std::memory_order_relaxed);
+          return;
+        }
+        seen[c].push_back(index_of(g, t));
+        inside[c].store(false, std::memory_order_relaxed);
+      },
+      &rec);
+  EXPECT_EQ(overlaps.load(), 0);
+
+  for (int c = 0; c < chains; ++c) {
+    std::vector<int> expected;
+    for (int t : tasks_of[c])
+      if (g.task(t).active) expected.push_back(t);
+    EXPECT_EQ(seen[static_cast<std::size_t>(c)], expected) << "chain " << c;
+    // The task after the inactive one starts after the one before it ended.
+    const int before = tasks_of[c][length / 2 - 1];
+    const int after = tasks_of[c][c == 0 ? length / 2 + 2 : length / 2 + 1];
+    EXPECT_GE(rec[static_cast<std::size_t>(after)].start_ns, rec[static_cast<std::size_t>(before)].end_ns);
+    EXPECT_EQ(rec[static_cast<std::size_t>(tasks_of[c][length / 2])].thread, -1);
+  }
+}
+
+TEST(Executor, ExceptionInATaskPropagatesOutOfRun) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  TaskGraph g;
+  for (int i = 0; i < 64; ++i) g.add(ty, i % 4, -1, i % 4);
+  g.finalize();
+  const int bad = 37;
+
+  Executor exec(2);
+  EXPECT_THROW(exec.run(g,
+                        [&](const Task& t) {
+                          if (index_of(g, t) == bad) throw std::runtime_error("task failed");
+                        }),
+               std::runtime_error);
+
+  // The executor is still usable afterwards.
+  std::atomic<int> ran{0};
+  exec.run(g, [&](const Task&) { ++ran; });
+  EXPECT_EQ(ran.load(), g.size());
+}
