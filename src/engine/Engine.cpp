@@ -200,7 +200,7 @@ void Engine::run_graph(StepInfo* info) {
 void Engine::initialise() {
   for (auto& b : gas_.time_bin) b = 0;
   ti_current_ = 0;
-  ctx_->first_step = true;
+  for (auto& t : gas_.ti_begin) t = 0;
   rebuild_pending_ = true;
   // A first density pass gives the MSPH rule real densities to compare; it is repeated
   // (with the cells recut) until every h fits in its cell's reach.
@@ -208,7 +208,14 @@ void Engine::initialise() {
   prepare_step(0);
   activate(Phase::Full);
   run_graph(nullptr);
-  ctx_->first_step = false;
+  wake_requested();
+}
+
+void Engine::wake_requested() {
+  if (!config_.hydro.timestep_limiter) return;
+  StepContext& ctx = *ctx_;
+  const auto& leaves = space_.leaves();
+  executor_.for_each(leaves.size(), [&](std::size_t l) { integration::wake(ctx, leaves[l]); });
 }
 
 void Engine::converge_density(Phase phase) {
@@ -237,7 +244,10 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   const int rebuilds_before = space_.rebuild_count();
   prepare_step(ti_next);
   info.active = activate(Phase::Full);
-  if (info.active > 0) run_graph(&info);
+  if (info.active > 0) {
+    run_graph(&info);
+    wake_requested();
+  }
   ++steps_;
   info.step = steps_;
   info.time = time();

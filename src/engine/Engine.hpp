@@ -73,6 +73,7 @@ class Engine {
   enum class Phase { Density, Hydro, Full };
   void rebuild();
   void converge_density(Phase phase);
+  void wake_requested();
   void build_graph();
   void prepare_step(IntegerTime ti);
   std::size_t activate(Phase phase);

@@ -22,7 +22,6 @@ struct StepContext {
   const TimeLine& timeline;
 
   IntegerTime ti_current = 0;
-  bool first_step = true;   // no closing half-kick: the particles have no step behind them
   double dx_bound = 0.0;    // largest distance any particle moved since the rebuild
 
   // Set by tasks, read by the engine after the step.
@@ -30,6 +29,10 @@ struct StepContext {
   std::atomic<int> h_capped{0};             // particles whose h was capped by the cover
 
   bool is_active(std::size_t i) const { return TimeLine::active(gas.time_bin[i], ti_current); }
+
+  // The bin a particle's step would take on the Courant criterion alone, capped by dt_max
+  // and alignment: what the limiter compares with the neighbours' bins.
+  int courant_bin(std::size_t i) const;
 };
 
 }  // namespace fountain

@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <atomic>
 #include <vector>
 
 #include "hydro/HydroIact.hpp"
@@ -32,6 +33,8 @@ void force_sums(StepContext& ctx, int ci, int cj) {
     const MsphState si = msph_state(gas, i, p.gamma);
     const Vec3 xi = gas.x[i];
     ForceSums s;
+    const int my_bin = p.timestep_limiter ? ctx.courant_bin(i) : 0;
+    int min_bin = kNoBin;
     for (std::size_t k = 0; k < b.count; ++k) {
       const std::size_t j = b.first + k;
       if (j == i) continue;
@@ -41,7 +44,21 @@ void force_sums(StepContext& ctx, int ci, int cj) {
       if (r2 >= hmax * hmax) continue;
       if (msph_decoupled(si, mj[k], dx, fi.v - fj[k].v, r2, p)) continue;
       iact_force(fi, fj[k], dx, r2, p, s);
+      if (p.timestep_limiter) {
+        const int bj = gas.time_bin[j];
+        min_bin = std::min(min_bin, bj);
+        // Ask a slower neighbour to shorten its step; a minimum, so the order of requests
+        // from different threads cannot change the outcome.
+        if (bj > my_bin + 2) {
+          std::atomic_ref<TimeBin> wake(gas.wake_bin[j]);
+          TimeBin cur = wake.load(std::memory_order_relaxed);
+          const TimeBin want = static_cast<TimeBin>(my_bin + 2);
+          while (want < cur && !wake.compare_exchange_weak(cur, want, std::memory_order_relaxed)) {
+          }
+        }
+      }
     }
+    if (min_bin != kNoBin) gas.limit_bin[i] = static_cast<TimeBin>(std::min<int>(gas.limit_bin[i], min_bin + 2));
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
     gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);
@@ -58,6 +75,7 @@ void force_self(StepContext& ctx, int ci) {
     gas.a_hydro[i] = {};
     gas.du_dt[i] = 0.0;
     gas.v_sig[i] = 0.0;
+    gas.limit_bin[i] = kNoBin;
   }
   force_sums(ctx, ci, ci);
 }

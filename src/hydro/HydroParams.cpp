@@ -17,6 +17,7 @@ HydroParams HydroParams::from(const ParameterFile& p) {
   h.msph_A_prime = p.real("hydro.msph_A_prime");
   h.h_max = p.real("hydro.h_max");
   h.max_h_iterations = static_cast<int>(p.integer("hydro.max_h_iterations"));
+  h.timestep_limiter = p.flag("time_integration.timestep_limiter");
   return h;
 }
 

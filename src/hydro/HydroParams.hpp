@@ -17,6 +17,7 @@ struct HydroParams {
   double msph_A_prime = 10.0;
   double h_max = 0.0;  // 0: unlimited
   int max_h_iterations = 50;
+  bool timestep_limiter = true;  // no particle's step more than 4x a neighbour's
 
   static HydroParams from(const ParameterFile& p);
 };

@@ -54,7 +54,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("units.velocity_cgs", "1e5", 0, inf, "Internal velocity unit in cm/s (default km/s).", true),
       // hydro
       real("hydro.gamma", "1.6666666666666667", 1, 3, "Adiabatic index.", true),
-      real("hydro.neighbours", "32", 1, 1e4, "Target kernel-weighted neighbour number N_ngb."),
+      real("hydro.neighbours", "32", 12, 1e4, "Target kernel-weighted neighbour number N_ngb."),
       real("hydro.neighbours_tolerance", "1", 0, 1e4,
            "Accepted deviation of the weighted neighbour number from N_ngb.", true),
       real("hydro.sph_alpha", "1.5", 0, 2, "Power alpha of the momentum equation (the paper: 3/2)."),
@@ -68,6 +68,8 @@ const std::vector<ParamSpec>& parameter_schema() {
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),
+      boolean("time_integration.timestep_limiter", "true",
+              "Keep every particle's step within 4x its neighbours' and wake sleeping neighbours of short-step particles (beyond the paper; false for paper-faithful runs)."),
       // space
       integer("space.cell_split_size", "64", 8, 1e6, "Octree cells with more particles than this are split."),
       integer("space.top_cells", "0", 0, 256, "Top-level cells along the longest box side; 0 chooses from the particle number."),

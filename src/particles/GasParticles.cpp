@@ -22,6 +22,10 @@ void GasParticles::permute(const std::vector<std::size_t>& order) {
     apply(*f, order, sd);
   for (auto* f : {&x, &v_full, &v, &curl_v, &a_hydro}) apply(*f, order, sv);
   apply(time_bin, order, sb);
+  apply(limit_bin, order, sb);
+  apply(wake_bin, order, sb);
+  std::vector<std::int64_t> st;
+  apply(ti_begin, order, st);
 }
 
 }  // namespace fountain

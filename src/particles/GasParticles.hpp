@@ -9,6 +9,7 @@
 namespace fountain {
 
 using TimeBin = std::int8_t;
+inline constexpr TimeBin kNoBin = 127;  // no limit, no request
 
 // Every field is a separate vector so a loop touches only what it needs. Positions and
 // velocities are physical in a non-cosmological run; in a comoving run they will be the
@@ -46,6 +47,9 @@ struct GasParticles {
 
   // Time integration.
   std::vector<TimeBin> time_bin;      // step length = 2^time_bin integer time units
+  std::vector<std::int64_t> ti_begin; // integer time the current step began
+  std::vector<TimeBin> limit_bin;     // neighbours' smallest bin + 2 (timestep limiter)
+  std::vector<TimeBin> wake_bin;      // requested by active neighbours: shorten the step to this bin
 
   std::size_t size() const { return id.size(); }
 
@@ -56,6 +60,9 @@ struct GasParticles {
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n); balsara.resize(n);
     a_hydro.resize(n); du_dt.resize(n); v_sig.resize(n);
     time_bin.resize(n);
+    ti_begin.resize(n);
+    limit_bin.resize(n, kNoBin);
+    wake_bin.resize(n, kNoBin);
   }
 
   // Reorder every field by `order` (new index k holds old particle order[k]).

@@ -8,7 +8,16 @@
 #include "core/Error.hpp"
 #include "hydro/HydroIact.hpp"
 
-namespace fountain::integration {
+namespace fountain {
+
+
+int StepContext::courant_bin(std::size_t i) const {
+  const double cs = hydro::sound_speed(gas.rho[i], gas.u[i], hydro.gamma);
+  const double dt = hydro::courant_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), hydro);
+  const int bin = std::min({timeline.bin_for(dt), timeline.bin_for(integration.dt_max),
+                            TimeLine::largest_aligned_bin(ti_current)});
+  return std::max(bin, 0);
+}
 
 namespace {
 
@@ -22,6 +31,8 @@ double kicked_energy(double u, double du_dt, double dt) {
 }
 
 }  // namespace
+
+namespace integration {
 
 void drift(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
@@ -51,8 +62,9 @@ void kick_close(StepContext& ctx, int c) {
   const Cell& cell = ctx.space.cell(c);
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
-    if (!ctx.first_step) {
-      const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
+    // Half of the step that ends now (shorter than its bin's if the particle was woken).
+    const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
+    if (dt != 0.0) {
       gas.v_full[i] += gas.a_hydro[i] * dt;
       gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
     }
@@ -83,6 +95,9 @@ void timestep(StepContext& ctx, int c) {
         throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {}",
                                      gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
       int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
+      if (p.timestep_limiter) bin = std::min<int>(bin, gas.limit_bin[i]);
+      gas.limit_bin[i] = kNoBin;
+      gas.ti_begin[i] = ctx.ti_current;
       if (bin < 0)
         throw InputError(fmt::format("gas particle id {} needs a timestep {} shorter than one tick of the timeline",
                                      gas.id[i], dt));
@@ -108,4 +123,26 @@ void kick_open(StepContext& ctx, int c) {
   cell.v_max = v_max;
 }
 
-}  // namespace fountain::integration
+void wake(StepContext& ctx, int c) {
+  GasParticles& gas = ctx.gas;
+  Cell& cell = ctx.space.cell(c);
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    const int w = gas.wake_bin[i];
+    if (w == kNoBin) continue;
+    gas.wake_bin[i] = kNoBin;
+    const int b = gas.time_bin[i];
+    if (w >= b) continue;
+    const IntegerTime old_end = gas.ti_begin[i] + TimeLine::step_ticks(b);
+    const IntegerTime new_end = TimeLine::step_end(w, ctx.ti_current);
+    if (new_end >= old_end) continue;
+    // Take back the part of the opening kick that belonged to the cut-off end of the step.
+    const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
+    gas.v_full[i] -= gas.a_hydro[i] * undo;
+    gas.u_full[i] -= gas.du_dt[i] * undo;
+    gas.time_bin[i] = static_cast<TimeBin>(w);
+    cell.ti_end_min = std::min(cell.ti_end_min, new_end);
+  }
+}
+
+}  // namespace integration
+}  // namespace fountain

@@ -17,4 +17,8 @@ void timestep(StepContext& ctx, int c);
 // Opens the new step of each active particle with its first half-kick.
 void kick_open(StepContext& ctx, int c);
 
+// Shortens the steps of particles that short-step neighbours asked to wake (the timestep
+// limiter): each ends at the next boundary of its requested bin. Runs between steps.
+void wake(StepContext& ctx, int c);
+
 }  // namespace fountain::integration

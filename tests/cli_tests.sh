@@ -1,0 +1,111 @@
+#!/bin/sh
+# End-to-end checks of the fountain executable: bad input stops it with a clear message and
+# a non-zero exit (never a crash); snapshots open in yt; 1 and 2 threads give identical
+# snapshots. Usage: cli_tests.sh FOUNTAIN_BINARY REPO_ROOT CASE
+set -eu
+bin=${1:?binary}
+root=${2:?repo root}
+case_name=${3:?case}
+python=${PYTHON:-/usr/bin/python3}
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/fountain_cli.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT INT TERM
+cd "$tmp"
+
+fail() { echo "FAIL: $*"; exit 1; }
+
+params() {  # params IC_FILE OUT_DIR [extra yaml]
+  cat > params.yml <<EOT
+run:
+  t_end: ${T_END:-0.002}
+initial_conditions:
+  file: $1
+  periodic: true
+output:
+  directory: $2
+time_integration:
+  dt_max: 0.001
+  dt_min: 1e-12
+${3:-}
+EOT
+}
+
+# expect_error PATTERN: the run exits with status 2 and prints PATTERN.
+expect_error() {
+  set +e
+  "$bin" run params.yml -q > out.txt 2>&1
+  status=$?
+  set -e
+  [ "$status" -eq 2 ] || { cat out.txt; fail "exit status $status, expected 2"; }
+  grep -q -- "$1" out.txt || { cat out.txt; fail "message does not mention '$1'"; }
+  echo "ok: $(cat out.txt)"
+}
+
+"$bin" ic sedov -n 8 -o good.hdf5 > /dev/null 2>&1 || fail "cannot write ICs"
+
+case "$case_name" in
+  missing_ic)
+    params nothere.hdf5 out; expect_error "nothere.hdf5" ;;
+  truncated_ic)
+    head -c 3000 good.hdf5 > cut.hdf5; params cut.hdf5 out; expect_error "cut.hdf5" ;;
+  not_hdf5)
+    echo "hello" > text.hdf5; params text.hdf5 out; expect_error "text.hdf5" ;;
+  missing_dataset)
+    "$python" -c "
+import h5py, shutil
+shutil.copy('good.hdf5', 'nou.hdf5')
+with h5py.File('nou.hdf5', 'a') as f: del f['PartType0/InternalEnergy']"
+    params nou.hdf5 out; expect_error "InternalEnergy" ;;
+  nan_energy)
+    "$python" -c "
+import h5py, shutil, numpy as np
+shutil.copy('good.hdf5', 'nan.hdf5')
+with h5py.File('nan.hdf5', 'a') as f: f['PartType0/InternalEnergy'][5] = np.nan"
+    params nan.hdf5 out; expect_error "ID" ;;
+  negative_mass)
+    "$python" -c "
+import h5py, shutil
+shutil.copy('good.hdf5', 'neg.hdf5')
+with h5py.File('neg.hdf5', 'a') as f: f['PartType0/Masses'][7] = -1.0"
+    params neg.hdf5 out; expect_error "ID" ;;
+  zero_particles)
+    "$python" -c "
+import h5py, numpy as np
+with h5py.File('zero.hdf5', 'w') as f:
+    h = f.create_group('Header')
+    h.attrs['NumPart_ThisFile'] = np.zeros(6, dtype=np.uint32)
+    h.attrs['NumPart_Total'] = np.zeros(6, dtype=np.uint32)
+    h.attrs['MassTable'] = np.zeros(6)
+    h.attrs['BoxSize'] = 1.0
+    h.attrs['Time'] = 0.0"
+    params zero.hdf5 out; expect_error "zero.hdf5" ;;
+  unwritable_output)
+    echo "a file" > blocker; params good.hdf5 blocker/out; expect_error "blocker/out" ;;
+  bad_parameter)
+    params good.hdf5 out "hydro:
+  gamma: soft"; expect_error "hydro.gamma" ;;
+  snapshot_opens_in_yt)
+    params good.hdf5 out
+    "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }
+    "$python" "$root/tests/check_snapshot_yt.py" out/snapshot_0001.hdf5 ;;
+  threads_bitwise)
+    T_END=0.01 params good.hdf5 out1; "$bin" run params.yml -q -t 1 > /dev/null 2>&1 || fail "1-thread run"
+    T_END=0.01 params good.hdf5 out2; "$bin" run params.yml -q -t 2 > /dev/null 2>&1 || fail "2-thread run"
+    T_END=0.01 params good.hdf5 out3; "$bin" run params.yml -q -t 2 > /dev/null 2>&1 || fail "repeat run"
+    "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 out2/snapshot_0001.hdf5
+    "$python" "$root/tests/compare_snapshots.py" out2/snapshot_0001.hdf5 out3/snapshot_0001.hdf5 ;;
+  task_dumps)
+    params good.hdf5 out "output:
+  directory: out
+  dump_task_graph: true
+  dump_timeline_every: 1"
+    sed -i '0,/^output:$/{/^output:$/d};0,/^  directory: out$/{/^  directory: out$/d}' params.yml
+    "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }
+    [ -s out/task_graph.dot ] || fail "no DOT graph"
+    head -2 out/dependency_graph_0.csv | grep -q "task_in,task_out" || fail "no SWIFT-style CSV"
+    ls out/timeline_step*.csv > /dev/null || fail "no timeline"
+    "$python" "$root/tasks/plot_tasks.py" out/timeline_step000001.csv -o gantt.png > summary.txt || fail "plot tool"
+    [ -s gantt.png ] || fail "no Gantt PNG"
+    grep -q density summary.txt || fail "summary lacks density" ;;
+  *) fail "unknown case $case_name" ;;
+esac
+echo "PASS: $case_name"
