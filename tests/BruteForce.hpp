@@ -27,7 +27,7 @@ struct BruteForce {
 
   bool decoupled(std::size_t i, std::size_t j, const Vec3& dx, double r2) const {
     if (i == j) return false;
-    return hydro::msph_decoupled(hydro::msph_state(gas, i, p.gamma), hydro::msph_state(gas, j, p.gamma), dx,
+    return hydro::msph_decoupled(hydro::msph_state(gas, i), hydro::msph_state(gas, j), dx,
                                  gas.v[i] - gas.v[j], r2, p);
   }
 

@@ -1,23 +1,24 @@
-#include <vector>
-
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
+#include "hydro/NeighbourBlock.hpp"
 
 namespace fountain::hydro {
 
-MsphState msph_state(const GasParticles& gas, std::size_t i, double gamma) {
-  return {gas.rho_msph[i], gas.u[i], gas.h_msph[i], std::sqrt(gamma * (gamma - 1.0) * gas.u[i])};
-}
-
 namespace {
 
-// Adds to the sums of the active particles of ci the contributions of the particles of cj
-// (cj == ci for the self task).
-void density_sums(StepContext& ctx, int ci, int cj) {
+ActiveBox active_box(const StepContext& ctx, const Cell& c) {
+  ActiveBox box;
+  for (std::size_t i = c.first; i < c.first + c.count; ++i)
+    if (ctx.is_active(i)) box.add(ctx.gas.x[i], ctx.gas.h[i]);
+  return box;
+}
+
+// Adds to the sums of the active particles of `a` the contributions of the particles in
+// `block` (positions already relative-ready: plain differences are the nearest images).
+void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
   GasParticles& gas = ctx.gas;
-  const Cell& a = ctx.space.cell(ci);
-  const Cell& b = ctx.space.cell(cj);
   const HydroParams& p = ctx.hydro;
+  const std::size_t nb = block.size();
   for (std::size_t i = a.first; i < a.first + a.count; ++i) {
     if (!ctx.is_active(i)) continue;
     const Vec3 xi = gas.x[i];
@@ -25,14 +26,15 @@ void density_sums(StepContext& ctx, int ci, int cj) {
     const double hi = gas.h[i];
     const double hi2 = hi * hi;
     const double hi_inv = 1.0 / hi;
-    const MsphState si = msph_state(gas, i, p.gamma);
+    const MsphState si = msph_state(gas, i);
     DensitySums s;
-    for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-      const Vec3 dx = ctx.space.separation(xi, gas.x[j]);
+    for (std::size_t k = 0; k < nb; ++k) {
+      const Vec3 dx{xi.x - block.x[k], xi.y - block.y[k], xi.z - block.z[k]};
       const double r2 = dot(dx, dx);
       if (r2 >= hi2) continue;
+      const std::size_t j = block.index[k];
       const Vec3 dv = vi - gas.v[j];
-      if (j != i && msph_decoupled(si, msph_state(gas, j, p.gamma), dx, dv, r2, p)) continue;
+      if (j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
       iact_density(dx, dv, r2, hi_inv, gas.mass[j], s);
     }
     gas.rho[i] += s.rho;
@@ -48,14 +50,31 @@ void density_sums(StepContext& ctx, int ci, int cj) {
 void density_self(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
   const Cell& c = ctx.space.cell(ci);
+  thread_local NeighbourBlock block;
+  block.clear();
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
+    block.add(gas.x[i], i);
     if (!ctx.is_active(i)) continue;
     gas.rho[i] = gas.wcount[i] = gas.wcount_dh[i] = gas.div_v[i] = 0.0;
     gas.curl_v[i] = {};
   }
-  density_sums(ctx, ci, ci);
+  density_sums(ctx, c, block);
 }
 
-void density_pair(StepContext& ctx, int ci, int cj) { density_sums(ctx, ci, cj); }
+void density_pair(StepContext& ctx, int ci, int cj) {
+  const Cell& a = ctx.space.cell(ci);
+  const Cell& b = ctx.space.cell(cj);
+  const ActiveBox box = active_box(ctx, a);
+  if (box.empty) return;
+  const Vec3 centre = box.centre();
+  const double reach2 = box.h_max * box.h_max;
+  thread_local NeighbourBlock block;
+  block.clear();
+  for (std::size_t j = b.first; j < b.first + b.count; ++j) {
+    const Vec3 xj = centre - ctx.space.separation(centre, ctx.gas.x[j]);
+    if (box.distance2(xj) < reach2) block.add(xj, j);
+  }
+  if (block.size() > 0) density_sums(ctx, a, block);
+}
 
 }  // namespace fountain::hydro

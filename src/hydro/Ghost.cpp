@@ -24,7 +24,7 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
   out.clear();
   const GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
-  const MsphState si = msph_state(gas, i, p.gamma);
+  const MsphState si = msph_state(gas, i);
   const double r2max = radius * radius;
   auto scan = [&](int cj) {
     const Cell& b = ctx.space.cell(cj);
@@ -33,7 +33,7 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
       const double r2 = dot(dx, dx);
       if (r2 >= r2max) continue;
       const Vec3 dv = gas.v[i] - gas.v[j];
-      if (j != i && msph_decoupled(si, msph_state(gas, j, p.gamma), dx, dv, r2, p)) continue;
+      if (j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
       out.push_back({dx, dv, r2, gas.mass[j]});
     }
   };
@@ -111,6 +111,8 @@ void ghost(StepContext& ctx, int ci) {
     gas.wcount_dh[i] = res.wcount_dh;
     gas.div_v[i] = res.div_v;
     gas.curl_v[i] = res.curl_v;
+    prepare_force(gas, i, p);
+    gas.courant_bin[i] = static_cast<TimeBin>(ctx.courant_bin(i));
   }
   double h_max = 0.0;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) h_max = std::max(h_max, gas.h[i]);

@@ -20,6 +20,18 @@ void force_self(StepContext& ctx, int ci);
 void force_pair(StepContext& ctx, int ci, int cj);
 
 // The state the MSPH rule sees of particle i this step.
-MsphState msph_state(const GasParticles& gas, std::size_t i, double gamma);
+inline MsphState msph_state(const GasParticles& gas, std::size_t i) {
+  return {gas.rho_msph[i], gas.u[i], gas.h_msph[i], gas.soundspeed[i]};
+}
+
+// Fills particle i's prepared force inputs (pressure, sound speed, rho powers, Balsara)
+// from its predicted state; the drift and the ghost call it.
+void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p);
+
+// Particle i's force inputs, as prepared.
+inline ForceState force_state(const GasParticles& gas, std::size_t i) {
+  return {gas.v[i], gas.mass[i], gas.rho[i], gas.h[i], gas.pressure[i], gas.soundspeed[i],
+          gas.rho_a[i], gas.rho_2ma[i], gas.balsara[i]};
+}
 
 }  // namespace fountain::hydro

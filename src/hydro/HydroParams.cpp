@@ -18,6 +18,7 @@ HydroParams HydroParams::from(const ParameterFile& p) {
   h.h_max = p.real("hydro.h_max");
   h.max_h_iterations = static_cast<int>(p.integer("hydro.max_h_iterations"));
   h.timestep_limiter = p.flag("time_integration.timestep_limiter");
+  h.limiter_bins = static_cast<int>(p.integer("time_integration.limiter_bin_difference"));
   return h;
 }
 

@@ -17,7 +17,8 @@ struct HydroParams {
   double msph_A_prime = 10.0;
   double h_max = 0.0;  // 0: unlimited
   int max_h_iterations = 50;
-  bool timestep_limiter = true;  // no particle's step more than 4x a neighbour's
+  bool timestep_limiter = true;  // no particle's step more than 2^limiter_bins x a neighbour's
+  int limiter_bins = 2;
 
   static HydroParams from(const ParameterFile& p);
 };

@@ -69,7 +69,9 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),
       boolean("time_integration.timestep_limiter", "true",
-              "Keep every particle's step within 4x its neighbours' and wake sleeping neighbours of short-step particles (beyond the paper; false for paper-faithful runs)."),
+              "Keep every particle's step within a factor of its neighbours' and wake sleeping neighbours of short-step particles (beyond the paper; false for paper-faithful runs)."),
+      integer("time_integration.limiter_bin_difference", "2", 1, 10,
+              "Largest difference of time bins between neighbours under the limiter: 2 allows steps 4x a neighbour's, 1 allows 2x."),
       // space
       integer("space.cell_split_size", "64", 8, 1e6, "Octree cells with more particles than this are split."),
       integer("space.top_cells", "0", 0, 256, "Top-level cells along the longest box side; 0 chooses from the particle number."),

@@ -18,11 +18,12 @@ void GasParticles::permute(const std::vector<std::size_t>& order) {
   std::vector<TimeBin> sb;
   apply(id, order, si);
   for (auto* f : {&mass, &u_full, &u, &h, &rho, &rho_msph, &h_msph, &wcount, &wcount_dh, &div_v,
-                  &balsara, &du_dt, &v_sig})
+                  &balsara, &pressure, &soundspeed, &rho_a, &rho_2ma, &du_dt, &v_sig})
     apply(*f, order, sd);
   for (auto* f : {&x, &v_full, &v, &curl_v, &a_hydro}) apply(*f, order, sv);
   apply(time_bin, order, sb);
   apply(limit_bin, order, sb);
+  apply(courant_bin, order, sb);
   apply(wake_bin, order, sb);
   std::vector<std::int64_t> st;
   apply(ti_begin, order, st);

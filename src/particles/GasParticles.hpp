@@ -38,7 +38,13 @@ struct GasParticles {
   std::vector<double> wcount_dh;      // d wcount / dh
   std::vector<double> div_v;
   std::vector<Vec3> curl_v;
-  std::vector<double> balsara;
+
+  // Prepared for the force loop from the predicted state (after each drift and ghost).
+  std::vector<double> pressure;
+  std::vector<double> soundspeed;     // sqrt(gamma (gamma-1) u): depends on u only
+  std::vector<double> rho_a;          // rho^alpha of the momentum equation
+  std::vector<double> rho_2ma;        // rho^(2-alpha)
+  std::vector<double> balsara;        // Balsara switch f_i
 
   // Force-loop results.
   std::vector<Vec3> a_hydro;
@@ -48,6 +54,7 @@ struct GasParticles {
   // Time integration.
   std::vector<TimeBin> time_bin;      // step length = 2^time_bin integer time units
   std::vector<std::int64_t> ti_begin; // integer time the current step began
+  std::vector<TimeBin> courant_bin;   // bin the Courant criterion alone allows (set by the ghost)
   std::vector<TimeBin> limit_bin;     // neighbours' smallest bin + 2 (timestep limiter)
   std::vector<TimeBin> wake_bin;      // requested by active neighbours: shorten the step to this bin
 
@@ -57,10 +64,12 @@ struct GasParticles {
     id.resize(n); mass.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
     v.resize(n); u.resize(n); h.resize(n); rho.resize(n);
     rho_msph.resize(n); h_msph.resize(n);
-    wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n); balsara.resize(n);
+    wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
+    pressure.resize(n); soundspeed.resize(n); rho_a.resize(n); rho_2ma.resize(n); balsara.resize(n);
     a_hydro.resize(n); du_dt.resize(n); v_sig.resize(n);
     time_bin.resize(n);
     ti_begin.resize(n);
+    courant_bin.resize(n);
     limit_bin.resize(n, kNoBin);
     wake_bin.resize(n, kNoBin);
   }

@@ -147,9 +147,13 @@ void Space::rebuild(GasParticles& gas) {
 
   half_ = size_ * 0.5;
   if (config_.periodic) {
-    // One image of each neighbour must suffice: the reach stays below half the box.
+    // One image of each neighbour, the one nearest the cell, must suffice: the reach from
+    // a cell's centre stays below half the box.
     double reach = 0.0;
-    for (int c : leaves_) reach = std::max(reach, cells_[static_cast<std::size_t>(c)].r_cover);
+    for (int c : leaves_) {
+      const Cell& cell = cells_[static_cast<std::size_t>(c)];
+      reach = std::max(reach, cell.r_cover + 0.5 * std::max({cell.width.x, cell.width.y, cell.width.z}));
+    }
     const double half = 0.5 * std::min({size_.x, size_.y, size_.z});
     if (reach >= half)
       throw InputError(fmt::format(

@@ -7,6 +7,7 @@
 
 #include "core/Error.hpp"
 #include "hydro/HydroIact.hpp"
+#include "hydro/HydroLoops.hpp"
 
 namespace fountain {
 
@@ -49,6 +50,7 @@ void drift(StepContext& ctx, int c) {
     }
     gas.rho_msph[i] = gas.rho[i];
     gas.h_msph[i] = gas.h[i];
+    hydro::prepare_force(gas, i, ctx.hydro);
     h_max = std::max(h_max, gas.h[i]);
   }
   cell.dx_max += cell.v_max * std::fabs(dt);
