@@ -1,0 +1,99 @@
+// Whole-run benchmark of a standard hydro problem: wall time, step costs, parallel share,
+// peak memory and accuracy, written as JSON. Usage: fountain_run_bench sod|sedov|gresho
+// [--threads N] [--resolution N] [--json FILE]
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+#include <sys/resource.h>
+
+#include <chrono>
+#include <fstream>
+
+#include "analysis/HydroReference.hpp"
+#include "engine/Engine.hpp"
+#include "ics/TestProblems.hpp"
+
+using namespace fountain;
+
+int main(int argc, char** argv) {
+  CLI::App app{"Fountain whole-run benchmark"};
+  std::string problem, json_path;
+  int threads = 1, resolution = 0, neighbours = 48;
+  double t_end = 0;
+  app.add_option("problem", problem)->required()->check(CLI::IsMember({"sod", "sedov", "gresho"}));
+  app.add_option("-t,--threads", threads);
+  app.add_option("-n,--resolution", resolution, "lattice cells per unit length");
+  app.add_option("--neighbours", neighbours);
+  app.add_option("--t-end", t_end);
+  app.add_option("--json", json_path);
+  CLI11_PARSE(app, argc, argv);
+
+  const double gamma = 5.0 / 3.0;
+  ics::ProblemIC ic;
+  double dt_max = 0.01;
+  if (problem == "sod") {
+    ic = ics::sod_shock(resolution > 0 ? resolution : 64, gamma);
+    if (t_end <= 0) t_end = 0.2;
+  } else if (problem == "sedov") {
+    ic = ics::sedov_blast(resolution > 0 ? resolution : 50, gamma);
+    if (t_end <= 0) t_end = 0.05;
+    dt_max = 5e-4;
+  } else {
+    ic = ics::gresho_vortex(resolution > 0 ? resolution : 64, gamma);
+    if (t_end <= 0) t_end = 1.0;
+  }
+  RunConfig c;
+  c.t_end = t_end;
+  c.threads = threads;
+  c.hydro.neighbours = neighbours;
+  c.hydro.msph = false;
+  c.hydro.limiter_bins = 1;
+  c.integration.dt_min = 1e-12;
+  c.integration.dt_max = dt_max;
+  c.space.periodic = true;
+  c.space.box_size = ic.box_size;
+  const std::size_t n = ic.gas.size();
+
+  const auto t0 = std::chrono::steady_clock::now();
+  Engine e(c, std::move(ic.gas));
+  e.initialise();
+  double full_step_s = 0, tasks_wall = 0, tasks_busy = 0, updates = 0;
+  long long full_steps = 0;
+  while (!e.finished()) {
+    const StepInfo s = e.step();
+    updates += static_cast<double>(s.active);
+    tasks_wall += s.tasks_wall_s;
+    tasks_busy += s.tasks_busy_s;
+    if (s.active == n && !s.rebuilt) {
+      full_step_s += s.wall_s;
+      ++full_steps;
+    }
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  e.drift_all();
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  const double peak_bytes = static_cast<double>(ru.ru_maxrss) * 1024.0;
+
+  std::string accuracy;
+  if (problem == "sod") {
+    const analysis::SodExact exact(std::string(FOUNTAIN_SOURCE_DIR) + "/data/hydro_tests/sod_exact_gamma5_3_t0.2.txt");
+    accuracy = fmt::format("\"sod_density_l1\": {:.6f}", analysis::sod_density_l1(e.gas(), exact));
+  } else if (problem == "sedov") {
+    const double r = analysis::sedov_shock_radius(e.gas(), {0.5, 0.5, 0.5}, {1, 1, 1});
+    accuracy = fmt::format("\"shock_radius\": {:.5f}, \"shock_radius_exact\": {:.5f}", r,
+                           analysis::sedov_exact_radius(1.0, 1.0, t_end));
+  } else {
+    accuracy = fmt::format("\"gresho_velocity_l1\": {:.6f}", analysis::gresho_velocity_l1(e.gas()));
+  }
+  const double per_particle_us = full_steps > 0 ? 1e6 * full_step_s / full_steps / static_cast<double>(n) : 0.0;
+  const std::string json = fmt::format(
+      "{{\"problem\": \"{}\", \"particles\": {}, \"threads\": {}, \"neighbours\": {}, \"t_end\": {}, "
+      "\"wall_s\": {:.3f}, \"steps\": {}, \"full_steps\": {}, \"full_step_us_per_particle\": {:.4f}, "
+      "\"updates_per_s\": {:.4g}, \"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, "
+      "{}}}\n",
+      problem, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
+      tasks_wall > 0 ? tasks_busy / (tasks_wall * e.threads()) : 0.0, peak_bytes / static_cast<double>(n), accuracy);
+  fmt::print("{}", json);
+  if (!json_path.empty()) std::ofstream(json_path) << json;
+  return 0;
+}
