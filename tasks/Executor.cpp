@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <exception>
 #include <stdexcept>
 #include <chrono>
 
@@ -37,26 +38,45 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
 
   std::atomic<std::int64_t> busy{0};
   std::atomic<int> done{0};
+  // Hand-offs between threads go through these atomics (and the wait counters), not only
+  // through TBB's queues: so a task sees the set-up and its predecessors' writes, the caller
+  // sees every task's writes, and ThreadSanitizer (TBB is not instrumented) sees it all too.
+  std::atomic<bool> go{false};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
   const std::int64_t t0 = now_ns();
 
   arena_->execute([&] {
     tbb::task_group group;
     // Runs task `first` and then, in this thread, whatever it readies, spawning the rest.
-    std::function<void(int)> process = [&](int first) {
+    std::function<void(int)> process;
+    // Every spawned job acquires `go` before it touches anything the caller set up.
+    auto spawn = [&](int t) {
+      group.run([&process, &go, t] {
+        (void)go.load(std::memory_order_acquire);
+        process(t);
+      });
+    };
+    process = [&](int first) {
       std::vector<int> ready{first};
       std::int64_t my_busy = 0;
       int my_done = 0;
       while (!ready.empty()) {
         const int t = ready.back();
         ready.pop_back();
-        // Pairs with the release of the last predecessor's decrement, so the task sees all
-        // its predecessors' writes (and ThreadSanitizer sees the edge TBB's queue hides).
+        // Pairs with the release of the last predecessor's decrement.
         (void)wait[static_cast<std::size_t>(t)].load(std::memory_order_acquire);
         const Task& task = graph.task(t);
         ++my_done;
         if (task.active) {
           const std::int64_t s = now_ns();
-          runner(task);
+          try {
+            runner(task);
+          } catch (...) {
+            // The first failure is kept and rethrown by the caller; what depends on it never runs.
+            if (!failed.exchange(true)) error = std::current_exception();
+            continue;
+          }
           const std::int64_t e = now_ns();
           my_busy += e - s;
           if (records)
@@ -70,24 +90,27 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
           } else if (keep < 0) {
             keep = u;
           } else {
-            group.run([&process, u] { process(u); });
+            spawn(u);
           }
         }
         if (keep >= 0) ready.push_back(keep);
       }
       busy.fetch_add(my_busy, std::memory_order_relaxed);
-      done.fetch_add(my_done, std::memory_order_relaxed);
+      done.fetch_add(my_done, std::memory_order_acq_rel);
     };
     // Roots are collected before any runs: once tasks run, counters of others reach zero.
     std::vector<int> roots;
     for (int t = 0; t < n; ++t)
       if (wait[static_cast<std::size_t>(t)].load(std::memory_order_relaxed) == 0) roots.push_back(t);
-    for (int t : roots) group.run([&process, t] { process(t); });
+    go.store(true, std::memory_order_release);
+    for (int t : roots) spawn(t);
     group.wait();
+    (void)done.load(std::memory_order_acquire);  // every job's writes, before `process` goes
   });
 
   last_wall_ns_ = now_ns() - t0;
-  if (done.load() != n)
+  if (failed.load()) std::rethrow_exception(error);
+  if (done.load(std::memory_order_acquire) != n)
     throw std::logic_error(fmt::format("task graph has a dependency cycle: {} of {} tasks could run", done.load(), n));
   last_busy_ns_ = busy.load();
 }
