@@ -17,13 +17,14 @@ using namespace fountain;
 int main(int argc, char** argv) {
   CLI::App app{"Fountain whole-run benchmark"};
   std::string problem, json_path;
-  int threads = 1, resolution = 0, neighbours = 48;
+  int threads = 1, resolution = 0, neighbours = 48, split = 256;
   double t_end = 0;
   app.add_option("problem", problem)->required()->check(CLI::IsMember({"sod", "sedov", "gresho"}));
   app.add_option("-t,--threads", threads);
   app.add_option("-n,--resolution", resolution, "lattice cells per unit length");
   app.add_option("--neighbours", neighbours);
   app.add_option("--t-end", t_end);
+  app.add_option("--split", split, "space.cell_split_size");
   app.add_option("--json", json_path);
   CLI11_PARSE(app, argc, argv);
 
@@ -51,6 +52,7 @@ int main(int argc, char** argv) {
   c.integration.dt_max = dt_max;
   c.space.periodic = true;
   c.space.box_size = ic.box_size;
+  c.space.split_size = split;
   const std::size_t n = ic.gas.size();
 
   const auto t0 = std::chrono::steady_clock::now();

@@ -6,16 +6,10 @@ namespace fountain::hydro {
 
 namespace {
 
-ActiveBox active_box(const StepContext& ctx, const Cell& c) {
-  ActiveBox box;
-  for (std::size_t i = c.first; i < c.first + c.count; ++i)
-    if (ctx.is_active(i)) box.add(ctx.gas.x[i], ctx.gas.h[i]);
-  return box;
-}
 
 // Adds to the sums of the active particles of `a` the contributions of the particles in
 // `block` (positions already relative-ready: plain differences are the nearest images).
-void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
+void density_sums(StepContext& ctx, const Cell& a, NeighbourBlock& block) {
   GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
   const std::size_t nb = block.size();
@@ -28,10 +22,11 @@ void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) 
     const double hi_inv = 1.0 / hi;
     const MsphState si = msph_state(gas, i);
     DensitySums s;
+    block.distances_to(xi);
     for (std::size_t k = 0; k < nb; ++k) {
-      const Vec3 dx{xi.x - block.x[k], xi.y - block.y[k], xi.z - block.z[k]};
-      const double r2 = dot(dx, dx);
+      const double r2 = block.r2[k];
       if (r2 >= hi2) continue;
+      const Vec3 dx{xi.x - block.x[k], xi.y - block.y[k], xi.z - block.z[k]};
       const std::size_t j = block.index[k];
       const Vec3 dv = vi - gas.v[j];
       if (j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
@@ -49,22 +44,27 @@ void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) 
 
 void density_self(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
-  const Cell& c = ctx.space.cell(ci);
+  Cell& c = ctx.space.cell(ci);
   thread_local NeighbourBlock block;
   block.clear();
+  ActiveBox box;
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
-    block.add(gas.x[i], i);
+    block.add(gas.x[i], gas.h[i], i);
     if (!ctx.is_active(i)) continue;
+    box.add(gas.x[i], gas.h[i]);
     gas.rho[i] = gas.wcount[i] = gas.wcount_dh[i] = gas.div_v[i] = 0.0;
     gas.curl_v[i] = {};
   }
+  c.active_lo = box.lo;
+  c.active_hi = box.hi;
+  c.active_h_max = box.empty ? -1.0 : box.h_max;
   density_sums(ctx, c, block);
 }
 
 void density_pair(StepContext& ctx, int ci, int cj) {
   const Cell& a = ctx.space.cell(ci);
   const Cell& b = ctx.space.cell(cj);
-  const ActiveBox box = active_box(ctx, a);
+  const ActiveBox box(a.active_lo, a.active_hi, a.active_h_max);
   if (box.empty) return;
   const Vec3 centre = box.centre();
   const double reach2 = box.h_max * box.h_max;
@@ -72,7 +72,7 @@ void density_pair(StepContext& ctx, int ci, int cj) {
   block.clear();
   for (std::size_t j = b.first; j < b.first + b.count; ++j) {
     const Vec3 xj = centre - ctx.space.separation(centre, ctx.gas.x[j]);
-    if (box.distance2(xj) < reach2) block.add(xj, j);
+    if (box.distance2(xj) < reach2) block.add(xj, ctx.gas.h[j], j);
   }
   if (block.size() > 0) density_sums(ctx, a, block);
 }

@@ -29,7 +29,7 @@ void request_wake(GasParticles& gas, std::size_t j, int bin) {
   }
 }
 
-void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
+void force_sums(StepContext& ctx, const Cell& a, NeighbourBlock& block) {
   GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
   const std::size_t nb = block.size();
@@ -41,13 +41,14 @@ void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
     const int my_bin = gas.courant_bin[i];
     int min_bin = kNoBin;
     ForceSums s;
+    const double hi2 = fi.h * fi.h;
+    block.distances_to(xi);
     for (std::size_t k = 0; k < nb; ++k) {
+      const double r2 = block.r2[k];
+      if (r2 >= hi2 && r2 >= block.h2[k]) continue;
       const std::size_t j = block.index[k];
       if (j == i) continue;
       const Vec3 dx{xi.x - block.x[k], xi.y - block.y[k], xi.z - block.z[k]};
-      const double r2 = dot(dx, dx);
-      const double hmax = std::max(fi.h, gas.h[j]);
-      if (r2 >= hmax * hmax) continue;
       const ForceState fj = force_state(gas, j);
       if (msph_decoupled(si, msph_state(gas, j), dx, fi.v - fj.v, r2, p)) continue;
       iact_force(fi, fj, dx, r2, p, s);
@@ -68,26 +69,30 @@ void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
 
 void force_self(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
-  const Cell& c = ctx.space.cell(ci);
+  Cell& c = ctx.space.cell(ci);
   thread_local NeighbourBlock block;
   block.clear();
+  ActiveBox box;
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
-    block.add(gas.x[i], i);
+    block.add(gas.x[i], gas.h[i], i);
     if (!ctx.is_active(i)) continue;
+    box.add(gas.x[i], gas.h[i]);
     gas.a_hydro[i] = {};
     gas.du_dt[i] = 0.0;
     gas.v_sig[i] = 0.0;
     gas.limit_bin[i] = kNoBin;
   }
+  // h has changed since the density loop: the pair tasks need the box with the new h.
+  c.active_lo = box.lo;
+  c.active_hi = box.hi;
+  c.active_h_max = box.empty ? -1.0 : box.h_max;
   force_sums(ctx, c, block);
 }
 
 void force_pair(StepContext& ctx, int ci, int cj) {
   const Cell& a = ctx.space.cell(ci);
   const Cell& b = ctx.space.cell(cj);
-  ActiveBox box;
-  for (std::size_t i = a.first; i < a.first + a.count; ++i)
-    if (ctx.is_active(i)) box.add(ctx.gas.x[i], ctx.gas.h[i]);
+  const ActiveBox box(a.active_lo, a.active_hi, a.active_h_max);
   if (box.empty) return;
   const Vec3 centre = box.centre();
   thread_local NeighbourBlock block;
@@ -95,7 +100,7 @@ void force_pair(StepContext& ctx, int ci, int cj) {
   for (std::size_t j = b.first; j < b.first + b.count; ++j) {
     const Vec3 xj = centre - ctx.space.separation(centre, ctx.gas.x[j]);
     const double reach = std::max(box.h_max, ctx.gas.h[j]);
-    if (box.distance2(xj) < reach * reach) block.add(xj, j);
+    if (box.distance2(xj) < reach * reach) block.add(xj, ctx.gas.h[j], j);
   }
   if (block.size() > 0) force_sums(ctx, a, block);
 }

@@ -73,7 +73,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       integer("time_integration.limiter_bin_difference", "2", 1, 10,
               "Largest difference of time bins between neighbours under the limiter: 2 allows steps 4x a neighbour's, 1 allows 2x."),
       // space
-      integer("space.cell_split_size", "64", 8, 1e6, "Octree cells with more particles than this are split."),
+      integer("space.cell_split_size", "256", 8, 1e6, "Octree cells with more particles than this are split."),
       integer("space.top_cells", "0", 0, 256, "Top-level cells along the longest box side; 0 chooses from the particle number."),
       real("space.rebuild_skin", "0.25", 0, 10,
            "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),

@@ -11,7 +11,7 @@ namespace fountain {
 struct SpaceConfig {
   bool periodic = false;
   Vec3 box_size;            // periodic box (ignored for open boundaries)
-  int split_size = 64;      // octree leaves hold at most this many particles
+  int split_size = 256;     // octree leaves hold at most this many particles
   int top_cells = 0;        // top-level cells along the longest side; 0 = automatic
   double skin = 0.25;       // leaves cover (1 + skin) h_max
 };
