@@ -45,8 +45,8 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   const int n = graph.size();
   std::vector<std::atomic<int>> wait(static_cast<std::size_t>(n));
   for (auto& w : wait) w.store(0, std::memory_order_relaxed);
-  for (const auto& t : graph.tasks())
-    for (int u : t.unlocks) wait[static_cast<std::size_t>(u)].fetch_add(1, std::memory_order_relaxed);
+  for (int t = 0; t < n; ++t)
+    for (int u : graph.unlocks(t)) wait[static_cast<std::size_t>(u)].fetch_add(1, std::memory_order_relaxed);
   if (records) records->assign(static_cast<std::size_t>(n), TaskRecord{});
 
   std::atomic<std::int64_t> busy{0};
@@ -97,7 +97,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
             (*records)[static_cast<std::size_t>(t)] = {tbb::this_task_arena::current_thread_index(), s - k0, e - k0};
         }
         int keep = -1;
-        for (int u : task.unlocks) {
+        for (int u : graph.unlocks(t)) {
           if (wait[static_cast<std::size_t>(u)].fetch_sub(1, std::memory_order_acq_rel) != 1) continue;
           if (!graph.task(u).active) {
             ready.push_back(u);  // no work: pass its unlocks on here

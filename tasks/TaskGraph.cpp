@@ -17,9 +17,14 @@ int TaskGraph::add(int type, int ci, int cj, int writes) {
   return static_cast<int>(tasks_.size()) - 1;
 }
 
+void TaskGraph::reserve(std::size_t tasks, std::size_t dependencies) {
+  tasks_.reserve(tasks);
+  edges_.reserve(dependencies);
+}
+
 void TaskGraph::depends(int before, int after) {
   if (before == after) return;
-  tasks_[static_cast<std::size_t>(before)].unlocks.push_back(after);
+  edges_.emplace_back(before, after);
 }
 
 void TaskGraph::finalize() {
@@ -32,17 +37,17 @@ void TaskGraph::finalize() {
     if (it != last_writer.end()) depends(it->second, t);
     last_writer[r] = t;
   }
-  for (auto& t : tasks_) {
-    std::sort(t.unlocks.begin(), t.unlocks.end());
-    t.unlocks.erase(std::unique(t.unlocks.begin(), t.unlocks.end()), t.unlocks.end());
-  }
+  std::sort(edges_.begin(), edges_.end());
+  edges_.erase(std::unique(edges_.begin(), edges_.end()), edges_.end());
+  unlock_offsets_.assign(tasks_.size() + 1, 0);
+  for (const auto& [before, after] : edges_) ++unlock_offsets_[static_cast<std::size_t>(before) + 1];
+  for (std::size_t t = 0; t < tasks_.size(); ++t) unlock_offsets_[t + 1] += unlock_offsets_[t];
+  unlock_targets_.resize(edges_.size());
+  for (std::size_t k = 0; k < edges_.size(); ++k) unlock_targets_[k] = edges_[k].second;  // sorted by (before, after)
+  std::vector<std::pair<int, int>>().swap(edges_);
   finalized_ = true;
 }
 
-std::size_t TaskGraph::num_dependencies() const {
-  std::size_t n = 0;
-  for (const auto& t : tasks_) n += t.unlocks.size();
-  return n;
-}
+std::size_t TaskGraph::num_dependencies() const { return unlock_targets_.size(); }
 
 }  // namespace fountain::tasks

@@ -1,7 +1,9 @@
 // A dependency graph of typed tasks over cells; knows no physics, only tasks and resources.
 #pragma once
 #include <cstdint>
+#include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace fountain::tasks {
@@ -36,7 +38,6 @@ struct Task {
   int cj = -1;          // the other cell of a pair task, read only
   int writes = -1;      // the one resource (cell) the task writes; -1 for none
   bool active = true;   // skipped tasks count as done at once
-  std::vector<int> unlocks;  // tasks that wait for this one
 };
 
 // Tasks plus dependencies. Every task that writes a resource is chained, in insertion
@@ -45,11 +46,20 @@ struct Task {
 // sums are reproducible whatever the number of threads.
 class TaskGraph {
  public:
+  // Room for `tasks` tasks and `dependencies` explicit dependencies (saves regrowth).
+  void reserve(std::size_t tasks, std::size_t dependencies);
   int add(int type, int ci, int cj = -1, int writes = -1);
   // `after` may start only when `before` has finished.
   void depends(int before, int after);
-  // Adds the per-resource chains; call once after the last add().
+  // Adds the per-resource chains and packs every task's unlocks into one array; call once
+  // after the last add().
   void finalize();
+
+  // The tasks that wait for task t (after finalize), sorted, without repeats.
+  std::span<const int> unlocks(int t) const {
+    const auto b = unlock_offsets_[static_cast<std::size_t>(t)], e = unlock_offsets_[static_cast<std::size_t>(t) + 1];
+    return {unlock_targets_.data() + b, e - b};
+  }
 
   const std::vector<Task>& tasks() const { return tasks_; }
   Task& task(int t) { return tasks_[static_cast<std::size_t>(t)]; }
@@ -63,6 +73,9 @@ class TaskGraph {
 
  private:
   std::vector<Task> tasks_;
+  std::vector<std::pair<int, int>> edges_;   // (before, after) until finalize
+  std::vector<std::size_t> unlock_offsets_;  // CSR: unlocks of t are targets[offsets[t], offsets[t+1])
+  std::vector<int> unlock_targets_;
   bool finalized_ = false;
 };
 

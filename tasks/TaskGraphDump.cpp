@@ -89,7 +89,7 @@ TypeGraph type_graph(const TaskGraph& graph, const TaskTypeRegistry& types) {
   }
   for (int i = 0; i < graph.size(); ++i) {
     const Task& t = graph.task(i);
-    for (int u : t.unlocks) {
+    for (int u : graph.unlocks(i)) {
       if (u < 0 || u >= graph.size())
         throw std::out_of_range(fmt::format("task {} unlocks task {}, which does not exist", i, u));
       ++g.links[{t.type, graph.task(u).type}];

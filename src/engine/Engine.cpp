@@ -79,6 +79,11 @@ void Engine::build_graph() {
   std::vector<int> drift(ncells, -1), ghost(ncells, -1), kick_close(ncells, -1);
   struct Pair { int task, ci, cj; };
   std::vector<Pair> dpairs, fpairs;
+  std::size_t npairs = 0;
+  for (int c : leaves) npairs += space_.neighbours(c).size();
+  graph_.reserve(7 * leaves.size() + 2 * npairs, 2 * npairs);
+  dpairs.reserve(npairs);
+  fpairs.reserve(npairs);
   for (int c : leaves) {
     drift[c] = graph_.add(types_.drift, c, -1, c);
     graph_.add(types_.density_self, c, -1, c);

@@ -60,7 +60,6 @@ void force_sums(StepContext& ctx, const Cell& a, NeighbourBlock& block) {
     }
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
-    gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);
     if (min_bin != kNoBin) gas.limit_bin[i] = static_cast<TimeBin>(std::min<int>(gas.limit_bin[i], min_bin + p.limiter_bins));
   }
 }
@@ -79,7 +78,6 @@ void force_self(StepContext& ctx, int ci) {
     box.add(gas.x[i], gas.h[i]);
     gas.a_hydro[i] = {};
     gas.du_dt[i] = 0.0;
-    gas.v_sig[i] = 0.0;
     gas.limit_bin[i] = kNoBin;
   }
   // h has changed since the density loop: the pair tasks need the box with the new h.

@@ -124,7 +124,6 @@ inline ForceState make_force_state(const Vec3& v, double m, double rho, double u
 struct ForceSums {
   Vec3 a;
   double du_dt = 0.0;
-  double v_sig = 0.0;
 };
 
 // The pair terms of paper eqs 1-2 (general alpha, Balsara-corrected viscosity), added to i.
@@ -153,8 +152,6 @@ inline void iact_force(const ForceState& i, const ForceState& j, const Vec3& dx,
   const double f = j.m * ((p_ij + p_ji) + visc) * dw_mean_over_r;
   s.a -= dx * f;
   s.du_dt += j.m * (p_ji + 0.5 * visc) * dw_mean_over_r * dot(dv, dx);
-  const double vsig = i.c + j.c - 3.0 * std::min(0.0, dot(dv, dx) / r);
-  s.v_sig = std::max(s.v_sig, vsig);
 }
 
 // ---------------------------------------------------------------- timestep

@@ -49,7 +49,6 @@ struct GasParticles {
   // Force-loop results.
   std::vector<Vec3> a_hydro;
   std::vector<double> du_dt;
-  std::vector<double> v_sig;          // maximal signal velocity with a neighbour
 
   // Time integration.
   std::vector<TimeBin> time_bin;      // step length = 2^time_bin integer time units
@@ -66,7 +65,7 @@ struct GasParticles {
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
     pressure.resize(n); soundspeed.resize(n); rho_a.resize(n); rho_2ma.resize(n); balsara.resize(n);
-    a_hydro.resize(n); du_dt.resize(n); v_sig.resize(n);
+    a_hydro.resize(n); du_dt.resize(n);
     time_bin.resize(n);
     ti_begin.resize(n);
     courant_bin.resize(n);
