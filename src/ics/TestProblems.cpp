@@ -78,6 +78,7 @@ double gresho_pressure(double r) {
 }
 
 ProblemIC gresho_vortex(int cells, double gamma, int depth_cells) {
+  if (depth_cells <= 0) depth_cells = std::max(1, cells / 2);
   ProblemIC ic;
   const double depth = static_cast<double>(depth_cells) / cells;
   ic.box_size = {1.0, 1.0, depth};

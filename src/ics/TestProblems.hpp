@@ -23,8 +23,9 @@ ProblemIC sod_shock(int cells_left, double gamma);
 ProblemIC sedov_blast(int cells, double gamma, double energy = 1.0, double p0 = 1e-6, int hot_particles = 15);
 
 // Gresho-Chan vortex: rho = 1, the standard triangular azimuthal velocity and balancing
-// pressure, in a periodic box 1 x 1 x (depth) with `cells` lattice cells per unit length.
-ProblemIC gresho_vortex(int cells, double gamma, int depth_cells = 4);
+// pressure, in a periodic box 1 x 1 x (depth) with `cells` lattice cells per unit length;
+// depth_cells = 0 takes half the box side (thinner slabs leave too few particles across).
+ProblemIC gresho_vortex(int cells, double gamma, int depth_cells = 0);
 
 // The Gresho vortex's azimuthal velocity and pressure at radius r.
 double gresho_velocity(double r);
