@@ -61,6 +61,12 @@ import h5py, shutil, numpy as np
 shutil.copy('good.hdf5', 'nan.hdf5')
 with h5py.File('nan.hdf5', 'a') as f: f['PartType0/InternalEnergy'][5] = np.nan"
     params nan.hdf5 out; expect_error "ID" ;;
+  negative_energy)
+    "$python" -c "
+import h5py, shutil
+shutil.copy('good.hdf5', 'negu.hdf5')
+with h5py.File('negu.hdf5', 'a') as f: f['PartType0/InternalEnergy'][3] = -1.0"
+    params negu.hdf5 out; expect_error "InternalEnergy" ;;
   negative_mass)
     "$python" -c "
 import h5py, shutil

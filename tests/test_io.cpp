@@ -269,6 +269,16 @@ TEST_F(IoTest, NanEnergyIsAnError) {
   EXPECT_TRUE(contains(msg, "particle ID " + std::to_string(h.ids[3]))) << msg;
 }
 
+TEST_F(IoTest, NegativeEnergyNamesTheParticle) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10);
+  h.u[6] = -2.0;
+  write_by_hand(path, h);
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, "/PartType0/InternalEnergy")) << msg;
+  EXPECT_TRUE(contains(msg, "particle ID " + std::to_string(h.ids[6]))) << msg;
+}
+
 TEST_F(IoTest, NegativeMassNamesTheParticle) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);

@@ -1,6 +1,6 @@
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
-#include "hydro/NeighbourBlock.hpp"
+#include "hydro/CellBlocks.hpp"
 
 namespace fountain::hydro {
 
@@ -46,35 +46,19 @@ void density_self(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
   Cell& c = ctx.space.cell(ci);
   thread_local NeighbourBlock block;
-  block.clear();
-  ActiveBox box;
+  load_own_cell(ctx, c, block);
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
-    block.add(gas.x[i], gas.h[i], i);
     if (!ctx.is_active(i)) continue;
-    box.add(gas.x[i], gas.h[i]);
     gas.rho[i] = gas.wcount[i] = gas.wcount_dh[i] = gas.div_v[i] = 0.0;
     gas.curl_v[i] = {};
   }
-  c.active_lo = box.lo;
-  c.active_hi = box.hi;
-  c.active_h_max = box.empty ? -1.0 : box.h_max;
   density_sums(ctx, c, block);
 }
 
 void density_pair(StepContext& ctx, int ci, int cj) {
   const Cell& a = ctx.space.cell(ci);
-  const Cell& b = ctx.space.cell(cj);
-  const ActiveBox box(a.active_lo, a.active_hi, a.active_h_max);
-  if (box.empty) return;
-  const Vec3 centre = box.centre();
-  const double reach2 = box.h_max * box.h_max;
   thread_local NeighbourBlock block;
-  block.clear();
-  for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-    const Vec3 xj = centre - ctx.space.separation(centre, ctx.gas.x[j]);
-    if (box.distance2(xj) < reach2) block.add(xj, ctx.gas.h[j], j);
-  }
-  if (block.size() > 0) density_sums(ctx, a, block);
+  if (load_neighbours(ctx, a, ctx.space.cell(cj), false, block) && block.size() > 0) density_sums(ctx, a, block);
 }
 
 }  // namespace fountain::hydro

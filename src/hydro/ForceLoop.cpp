@@ -3,7 +3,7 @@
 
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
-#include "hydro/NeighbourBlock.hpp"
+#include "hydro/CellBlocks.hpp"
 
 namespace fountain::hydro {
 
@@ -70,37 +70,21 @@ void force_self(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
   Cell& c = ctx.space.cell(ci);
   thread_local NeighbourBlock block;
-  block.clear();
-  ActiveBox box;
+  // h has changed since the density loop: the pair tasks need the box with the new h.
+  load_own_cell(ctx, c, block);
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
-    block.add(gas.x[i], gas.h[i], i);
     if (!ctx.is_active(i)) continue;
-    box.add(gas.x[i], gas.h[i]);
     gas.a_hydro[i] = {};
     gas.du_dt[i] = 0.0;
     gas.limit_bin[i] = kNoBin;
   }
-  // h has changed since the density loop: the pair tasks need the box with the new h.
-  c.active_lo = box.lo;
-  c.active_hi = box.hi;
-  c.active_h_max = box.empty ? -1.0 : box.h_max;
   force_sums(ctx, c, block);
 }
 
 void force_pair(StepContext& ctx, int ci, int cj) {
   const Cell& a = ctx.space.cell(ci);
-  const Cell& b = ctx.space.cell(cj);
-  const ActiveBox box(a.active_lo, a.active_hi, a.active_h_max);
-  if (box.empty) return;
-  const Vec3 centre = box.centre();
   thread_local NeighbourBlock block;
-  block.clear();
-  for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-    const Vec3 xj = centre - ctx.space.separation(centre, ctx.gas.x[j]);
-    const double reach = std::max(box.h_max, ctx.gas.h[j]);
-    if (box.distance2(xj) < reach * reach) block.add(xj, ctx.gas.h[j], j);
-  }
-  if (block.size() > 0) force_sums(ctx, a, block);
+  if (load_neighbours(ctx, a, ctx.space.cell(cj), true, block) && block.size() > 0) force_sums(ctx, a, block);
 }
 
 }  // namespace fountain::hydro
