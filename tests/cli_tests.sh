@@ -99,6 +99,44 @@ with h5py.File('zero.hdf5', 'w') as f:
     T_END=0.01 params good.hdf5 out3; "$bin" run params.yml -q -t 2 > /dev/null 2>&1 || fail "repeat run"
     "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 out2/snapshot_0001.hdf5
     "$python" "$root/tests/compare_snapshots.py" out2/snapshot_0001.hdf5 out3/snapshot_0001.hdf5 ;;
+  restart_after_kill)
+    # The same run uninterrupted (A), and killed with SIGKILL then restarted (B), must end with
+    # bitwise-identical snapshots. Both write restart files every 4 steps.
+    extra="restart:
+  every_steps: 4"
+    T_END=0.03 params good.hdf5 outA "$extra"; cp params.yml paramsA.yml
+    T_END=0.03 params good.hdf5 outB "$extra"; cp params.yml paramsB.yml
+    "$bin" run paramsA.yml -q > /dev/null 2>&1 || fail "uninterrupted run"
+    "$bin" run paramsB.yml > runB.txt 2>&1 &
+    pid=$!
+    n=0
+    while [ ! -f outB/restart.hdf5 ] && kill -0 "$pid" 2>/dev/null && [ $n -lt 600 ]; do sleep 0.05; n=$((n + 1)); done
+    sleep 0.3
+    kill -9 "$pid" 2>/dev/null || true
+    wait "$pid" 2>/dev/null || true
+    [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
+    echo "killed after: $(grep -c '^step' runB.txt) steps"
+    "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
+    head -1 restart.txt
+    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
+  corrupted_restart)
+    params good.hdf5 out "restart:
+  every_steps: 2"
+    "$bin" run params.yml -q > /dev/null 2>&1 || fail "run"
+    "$python" -c "
+import h5py
+with h5py.File('out/restart.hdf5', 'a') as f: f['Gas/u'][2] = 1.2345"
+    expect_error_restart() {
+      set +e; "$bin" run params.yml -q --restart > out.txt 2>&1; status=$?; set -e
+      [ "$status" -eq 2 ] || { cat out.txt; fail "exit status $status, expected 2"; }
+      grep -q -- "$1" out.txt || { cat out.txt; fail "message does not mention '$1'"; }
+      echo "ok: $(cat out.txt)"
+    }
+    expect_error_restart "corrupted"
+    # A restart file of another problem (other parameters) is refused too.
+    "$bin" run params.yml -q > /dev/null 2>&1 || fail "run"
+    sed -i 's/^  t_end: .*/  t_end: 0.5/' params.yml
+    expect_error_restart "run.t_end" ;;
   task_dumps)
     params good.hdf5 out "output:
   directory: out

@@ -3,12 +3,14 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
 #include "core/Error.hpp"
 #include "engine/Engine.hpp"
 #include "io/InitialConditions.hpp"
+#include "io/RestartFile.hpp"
 #include "io/Snapshot.hpp"
 #include "params/ParameterFile.hpp"
 #include "tasks/TaskGraphDump.hpp"
@@ -53,12 +55,39 @@ std::string resolve_ic_path(const ParameterFile& params) {
 
 }  // namespace
 
-RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_override) {
+namespace {
+
+volatile std::sig_atomic_t g_terminate = 0;
+extern "C" void on_sigterm(int) { g_terminate = 1; }
+
+// A restart must continue the same problem: every parameter but the thread count must match.
+void check_same_parameters(const io::RestartState& state, const ParameterFile& params, const std::string& path) {
+  const ParameterFile saved = ParameterFile::parse(state.parameters_yaml, path + ":/Restart/Parameters");
+  for (const auto& [key, value] : params.values()) {
+    if (key == "run.threads") continue;
+    const auto it = saved.values().find(key);
+    if (it == saved.values().end() || it->second != value)
+      throw InputError(fmt::format("{}: restart file was written with {} = {}, but {} says {}", path, key,
+                                   it == saved.values().end() ? "(unset)" : it->second, params.origin(), value));
+  }
+}
+
+}  // namespace
+
+std::string restart_path(const ParameterFile& params) { return params.text("output.directory") + "/restart.hdf5"; }
+
+RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_override, bool restart) {
   const auto t_start = std::chrono::steady_clock::now();
   RunConfig config = RunConfig::from(params);
   if (threads_override >= 0) config.threads = threads_override;
   check_output_directory(config.output.directory);
   io::InitialConditions ic = io::read_initial_conditions(resolve_ic_path(params));
+  io::RestartState state;
+  if (restart) {
+    state = io::read_restart(restart_path(params));
+    check_same_parameters(state, params, restart_path(params));
+    ic.gas = std::move(state.gas);
+  }
   config.space.box_size = ic.box_size;
   if (config.space.periodic && !(ic.box_size.x > 0 && ic.box_size.y > 0 && ic.box_size.z > 0))
     throw InputError(fmt::format("{}: periodic run needs a positive /Header/BoxSize", resolve_ic_path(params)));
@@ -72,7 +101,14 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   Engine engine(config, std::move(ic.gas));
   const bool dump_timeline = config.output.dump_timeline_every > 0;
   engine.set_record_timeline(dump_timeline || config.output.dump_task_graph);
-  engine.initialise();
+  if (restart) {
+    engine.restore(state.ti_current, state.steps);
+    if (!quiet) fmt::print(stderr, "restarted from {} at t = {:.6g}, step {}\n", restart_path(params), engine.time(),
+                           engine.steps());
+  } else {
+    engine.initialise();
+  }
+  std::signal(SIGTERM, on_sigterm);
 
   io::SnapshotInfo info;
   info.box_size = config.space.box_size;
@@ -94,15 +130,30 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     if (!quiet) fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info.time);
     ++summary.snapshots;
   };
+  summary.snapshots = restart ? state.snapshots_written : 0;
   if (config.output.dump_task_graph) {
     tasks::write_dot(engine.graph(), engine.task_types().registry, config.output.directory + "/task_graph.dot");
     tasks::write_dependency_csv(engine.graph(), engine.task_types().registry,
                                 config.output.directory + "/dependency_graph_0.csv");
   }
-  write();
+  if (!restart) write();
 
   const double dt_out = config.output.delta_time;
-  int next_output = 1;
+  int next_output = restart ? state.next_output : 1;
+  auto last_restart = std::chrono::steady_clock::now();
+  auto write_restart = [&] {
+    engine.rebuild_now();
+    io::RestartState out;
+    out.gas = engine.gas();
+    out.ti_current = engine.ti_current();
+    out.steps = engine.steps();
+    out.snapshots_written = summary.snapshots;
+    out.next_output = next_output;
+    out.parameters_yaml = config.parameters_yaml;
+    io::write_restart(restart_path(params), out);
+    last_restart = std::chrono::steady_clock::now();
+    if (!quiet) fmt::print(stderr, "restart file {} at step {}\n", restart_path(params), engine.steps());
+  };
   auto next_output_ticks = [&] {
     if (dt_out <= 0.0) return TimeLine::ticks;
     const double t = config.t_begin + next_output * dt_out;
@@ -123,8 +174,19 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
       ++next_output;
       ti_out = next_output_ticks();
     }
+    if (engine.finished()) break;
+    const double minutes = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_restart).count() / 60.0;
+    if (g_terminate || (config.restart.every_steps > 0 && engine.steps() % config.restart.every_steps == 0) ||
+        (config.restart.every_minutes > 0 && minutes >= config.restart.every_minutes))
+      write_restart();
+    if (g_terminate) {
+      fmt::print(stderr, "stopped by SIGTERM at step {}; continue with: fountain run {} --restart\n", engine.steps(),
+                 params.origin());
+      summary.terminated = true;
+      break;
+    }
   }
-  write();
+  if (!summary.terminated) write();
   summary.steps = engine.steps();
   summary.final_time = engine.time();
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -13,11 +13,17 @@ struct RunSummary {
   int snapshots = 0;
   double wall_s = 0.0;
   double final_time = 0.0;
+  bool terminated = false;  // stopped by SIGTERM after writing a restart file
 };
 
-// Runs the parameter file's problem to run.t_end. Problems with the input (the parameter
-// file, the IC file, the output folder) throw InputError before any step is taken.
-RunSummary run_simulation(const ParameterFile& params, bool quiet = false, int threads_override = -1);
+// Runs the parameter file's problem to run.t_end, or continues it from its restart file
+// (<output.directory>/restart.hdf5) with `restart`. Problems with the input (the parameter
+// file, the IC file, the output folder, the restart file) throw InputError before any step.
+RunSummary run_simulation(const ParameterFile& params, bool quiet = false, int threads_override = -1,
+                          bool restart = false);
+
+// Where a run's restart file lives.
+std::string restart_path(const ParameterFile& params);
 
 // The build's identity, recorded in every snapshot.
 std::string git_revision();

@@ -19,10 +19,11 @@ int main(int argc, char** argv) {
   auto* run = app.add_subcommand("run", "Run the problem of a YAML parameter file");
   std::string param_path;
   int threads = -1;
-  bool quiet = false;
+  bool quiet = false, restart = false;
   run->add_option("params", param_path, "Parameter file")->required();
   run->add_option("-t,--threads", threads, "Worker threads (overrides run.threads)");
   run->add_flag("-q,--quiet", quiet, "No per-step progress lines");
+  run->add_flag("-r,--restart", restart, "Continue from <output.directory>/restart.hdf5");
 
   auto* ic = app.add_subcommand("ic", "Write the initial conditions of a validation problem");
   std::string problem, out_path;
@@ -45,7 +46,8 @@ int main(int argc, char** argv) {
   try {
     if (*run) {
       const ParameterFile params = ParameterFile::load(param_path);
-      const RunSummary s = run_simulation(params, quiet, threads);
+      const RunSummary s = run_simulation(params, quiet, threads, restart);
+      if (s.terminated) return 0;
       fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
     } else if (*ic) {

@@ -216,6 +216,17 @@ void Engine::initialise() {
   wake_requested();
 }
 
+void Engine::rebuild_now() {
+  rebuild_pending_ = true;
+  prepare_step(ti_current_);
+}
+
+void Engine::restore(IntegerTime ti_current, long long steps) {
+  ti_current_ = ti_current;
+  steps_ = steps;
+  rebuild_now();
+}
+
 void Engine::wake_requested() {
   if (!config_.hydro.timestep_limiter) return;
   StepContext& ctx = *ctx_;

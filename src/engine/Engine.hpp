@@ -48,6 +48,12 @@ class Engine {
   // Drifts every particle to the current time (before a snapshot).
   void drift_all();
 
+  // Drifts everything and recuts the cells now. Called before a restart file is written, so
+  // that the saved run and the restarted one continue from the same cells, bit for bit.
+  void rebuild_now();
+  // Continues a run from a restart file's particles (in place of initialise()).
+  void restore(IntegerTime ti_current, long long steps);
+
   // Densities, h and forces of the particles active at ti, with no kick: for tests that
   // compare the loops with direct summation.
   void compute_hydro_at(IntegerTime ti);

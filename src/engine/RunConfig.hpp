@@ -19,6 +19,11 @@ struct OutputConfig {
   long long dump_timeline_every = 0;
 };
 
+struct RestartConfig {
+  long long every_steps = 0;
+  double every_minutes = 0.0;
+};
+
 struct RunConfig {
   double t_begin = 0.0;
   double t_end = 1.0;
@@ -30,6 +35,7 @@ struct RunConfig {
   SpaceConfig space;
   Units units;
   OutputConfig output;
+  RestartConfig restart;
   std::string parameters_yaml;      // the parameters in force, for snapshots
 
   static RunConfig from(const ParameterFile& p);

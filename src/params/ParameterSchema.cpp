@@ -48,6 +48,10 @@ const std::vector<ParamSpec>& parameter_schema() {
               "Write the task dependency graph (DOT and SWIFT-style CSV) after the first step."),
       integer("output.dump_timeline_every", "0", 0, 1e15,
               "Write a per-task timeline (CSV) every this many steps; 0 never."),
+      // restart
+      integer("restart.every_steps", "0", 0, 1e15,
+              "Write <output.directory>/restart.hdf5 every this many steps; 0 never (SIGTERM always writes one)."),
+      real("restart.every_minutes", "0", 0, inf, "Also write it when this many minutes of wall time have passed since the last; 0 never."),
       // units
       real("units.length_cgs", "3.0856775814913673e24", 0, inf, "Internal length unit in cm (default Mpc).", true),
       real("units.mass_cgs", "1.988409870698051e33", 0, inf, "Internal mass unit in g (default Msun).", true),
