@@ -41,12 +41,28 @@ Executor::Executor(int threads)
 
 Executor::~Executor() = default;
 
-void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records) {
+void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records,
+                   const std::vector<int>* only) {
   const int n = graph.size();
   std::vector<std::atomic<int>> wait(static_cast<std::size_t>(n));
+  // Which tasks take part: all of them, or the listed ones.
+  const bool subset = only != nullptr;
+  if (subset) {
+    listed_.assign(static_cast<std::size_t>(n), 0);
+    for (int t : *only) listed_[static_cast<std::size_t>(t)] = 1;
+  }
+  auto takes_part = [&](int t) { return !subset || listed_[static_cast<std::size_t>(t)]; };
+  const int n_part = subset ? static_cast<int>(only->size()) : n;
   for (auto& w : wait) w.store(0, std::memory_order_relaxed);
-  for (int t = 0; t < n; ++t)
-    for (int u : graph.unlocks(t)) wait[static_cast<std::size_t>(u)].fetch_add(1, std::memory_order_relaxed);
+  auto count_unlocks = [&](int t) {
+    for (int u : graph.unlocks(t))
+      if (takes_part(u)) wait[static_cast<std::size_t>(u)].fetch_add(1, std::memory_order_relaxed);
+  };
+  if (subset) {
+    for (int t : *only) count_unlocks(t);
+  } else {
+    for (int t = 0; t < n; ++t) count_unlocks(t);
+  }
   if (records) records->assign(static_cast<std::size_t>(n), TaskRecord{});
 
   std::atomic<std::int64_t> busy{0};
@@ -98,6 +114,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         }
         int keep = -1;
         for (int u : graph.unlocks(t)) {
+          if (!takes_part(u)) continue;
           if (wait[static_cast<std::size_t>(u)].fetch_sub(1, std::memory_order_acq_rel) != 1) continue;
           if (!graph.task(u).active) {
             ready.push_back(u);  // no work: pass its unlocks on here
@@ -114,8 +131,14 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     };
     // Roots are collected before any runs: once tasks run, counters of others reach zero.
     std::vector<int> roots;
-    for (int t = 0; t < n; ++t)
+    auto root_if_free = [&](int t) {
       if (wait[static_cast<std::size_t>(t)].load(std::memory_order_relaxed) == 0) roots.push_back(t);
+    };
+    if (subset) {
+      for (int t : *only) root_if_free(t);
+    } else {
+      for (int t = 0; t < n; ++t) root_if_free(t);
+    }
     go.store(true, std::memory_order_release);
     for (int t : roots) spawn(t);
     group.wait();
@@ -131,8 +154,8 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
       r.end_ns = static_cast<std::int64_t>(static_cast<double>(r.end_ns) * ns_per_tick);
     }
   if (failed.load()) std::rethrow_exception(error);
-  if (done.load(std::memory_order_acquire) != n)
-    throw std::logic_error(fmt::format("task graph has a dependency cycle: {} of {} tasks could run", done.load(), n));
+  if (done.load(std::memory_order_acquire) != n_part)
+    throw std::logic_error(fmt::format("task graph has a dependency cycle: {} of {} tasks could run", done.load(), n_part));
   last_busy_ns_ = static_cast<std::int64_t>(static_cast<double>(busy.load()) * ns_per_tick);
 }
 

@@ -33,7 +33,13 @@ class Executor {
   // Runs every active task of `graph` once its predecessors have finished; inactive tasks
   // pass their unlocks on at once. Fills `records` (one per task) when it is non-null.
   // An exception thrown by a task is rethrown here after the running tasks have stopped.
-  void run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records = nullptr);
+  //
+  // With `only`, just those tasks run and every other task is ignored, dependencies through
+  // it included: the cost is then that of the listed tasks, not of the whole graph. The
+  // caller promises that every ordering that matters between listed tasks is a direct
+  // dependency (or a chain of listed tasks).
+  void run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records = nullptr,
+           const std::vector<int>* only = nullptr);
 
   // Runs fn(0..n-1) in parallel on this executor's threads (for simple per-cell sweeps).
   void for_each(std::size_t n, const std::function<void(std::size_t)>& fn);
@@ -45,6 +51,7 @@ class Executor {
  private:
   int threads_;
   std::unique_ptr<tbb::task_arena> arena_;
+  std::vector<char> listed_;  // scratch for `only`: which tasks are listed
   std::int64_t last_wall_ns_ = 0;
   std::int64_t last_busy_ns_ = 0;
 };

@@ -84,7 +84,9 @@ void Engine::build_graph() {
   graph_.reserve(7 * leaves.size() + 2 * npairs, 2 * npairs);
   dpairs.reserve(npairs);
   fpairs.reserve(npairs);
+  cell_tasks_.assign(ncells, {-1, -1});
   for (int c : leaves) {
+    cell_tasks_[c].first = graph_.size();
     drift[c] = graph_.add(types_.drift, c, -1, c);
     graph_.add(types_.density_self, c, -1, c);
     for (int n : space_.neighbours(c)) dpairs.push_back({graph_.add(types_.density_pair, c, n, c), c, n});
@@ -94,6 +96,7 @@ void Engine::build_graph() {
     kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
     graph_.add(types_.timestep, c, -1, c);
     graph_.add(types_.kick_open, c, -1, c);
+    cell_tasks_[c].second = graph_.size();
   }
   // Reads of a neighbour cell: after its drift (density), after its ghost (force), and
   // before it closes its step (the kick rewrites the predicted state others read).
@@ -131,18 +134,24 @@ std::size_t Engine::activate(Phase phase) {
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
         active_particles += ctx_->is_active(i) ? 1 : 0;
     }
-  for (int t = 0; t < graph_.size(); ++t) {
-    auto& task = graph_.task(t);
-    if (task.type == types_.drift) {
-      task.active = needs_drift[task.ci];
-      continue;
+  // Only the tasks of active cells (and the drifts of their neighbours) are listed for the
+  // executor; every ordering between them is a direct dependency or runs through a listed
+  // chain (docs/design.md), so nothing else needs to be visited.
+  graph_.set_all_active(false);
+  step_tasks_.clear();
+  auto allowed = [&](int type) {
+    if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
+    if (phase == Phase::Hydro) return type != types_.kick_close && type != types_.timestep && type != types_.kick_open;
+    return true;
+  };
+  for (int c : leaves) {
+    if (!needs_drift[c]) continue;
+    const auto [begin, end] = cell_tasks_[c];
+    for (int t = begin; t < end; ++t) {
+      auto& task = graph_.task(t);
+      task.active = task.type == types_.drift || (cell_active_[c] && allowed(task.type));
+      if (task.active) step_tasks_.push_back(t);
     }
-    bool allowed = true;
-    if (phase == Phase::Density)
-      allowed = task.type == types_.density_self || task.type == types_.density_pair || task.type == types_.ghost;
-    else if (phase == Phase::Hydro)
-      allowed = task.type != types_.kick_close && task.type != types_.timestep && task.type != types_.kick_open;
-    task.active = allowed && cell_active_[task.ci];
   }
   return active_particles;
 }
@@ -190,11 +199,11 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
   };
-  executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr);
+  executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr, &step_tasks_);
   if (info) {
     info->tasks_wall_s += 1e-9 * static_cast<double>(executor_.last_wall_ns());
     info->tasks_busy_s += 1e-9 * static_cast<double>(executor_.last_busy_ns());
-    for (const auto& t : graph_.tasks()) info->tasks_run += t.active ? 1 : 0;
+    info->tasks_run += step_tasks_.size();
   }
   if (ctx_->cover_exceeded) rebuild_pending_ = true;
   if (info && ctx_->h_capped > 0)

@@ -96,6 +96,8 @@ class Engine {
   std::unique_ptr<StepContext> ctx_;
   std::vector<tasks::TaskRecord> records_;
   std::vector<char> cell_active_;
+  std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
+  std::vector<int> step_tasks_;                  // the tasks the current step runs
   IntegerTime ti_current_ = 0;
   long long steps_ = 0;
   bool rebuild_pending_ = true;
