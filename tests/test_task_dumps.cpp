@@ -472,3 +472,31 @@ TEST(Executor, ExceptionInATaskPropagatesOutOfRun) {
   exec.run(g, [&](const Task&) { ++ran; });
   EXPECT_EQ(ran.load(), g.size());
 }
+
+// With a list of tasks, only those run; dependencies between listed tasks are honoured and
+// unlisted ones neither run nor hold anything up.
+TEST(Executor, OnlyListedTasksRunInDependencyOrder) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"step", "", "test"});
+  TaskGraph g;
+  const int a = g.add(ty, 0), b = g.add(ty, 1), c = g.add(ty, 2), d = g.add(ty, 3);
+  g.depends(a, b);  // a -> b -> d, and c (unlisted) -> d
+  g.depends(b, d);
+  g.depends(c, d);
+  g.finalize();
+  const std::vector<int> only{a, b, d};
+  std::vector<int> order;
+  std::atomic<int> running{0};
+  std::atomic<int> overlaps{0};
+  Executor exec(2);
+  exec.run(
+      g,
+      [&](const Task& t) {
+        if (running.fetch_add(1) != 0) overlaps.fetch_add(1);
+        order.push_back(t.ci);
+        running.fetch_sub(1);
+      },
+      nullptr, &only);
+  EXPECT_EQ(overlaps.load(), 0);  // a chain of dependencies: never two at once
+  EXPECT_EQ(order, (std::vector<int>{0, 1, 3}));
+}
