@@ -1,4 +1,5 @@
 #include "Executor.hpp"
+#include "TbbHandOff.hpp"
 
 #if defined(__x86_64__)
 #include <x86intrin.h>
@@ -80,13 +81,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     tbb::task_group group;
     // Runs task `first` and then, in this thread, whatever it readies, spawning the rest.
     std::function<void(int)> process;
-    // Every spawned job acquires `go` before it touches anything the caller set up.
-    auto spawn = [&](int t) {
-      group.run([&process, &go, t] {
-        (void)go.load(std::memory_order_acquire);
-        process(t);
-      });
-    };
+    auto spawn = [&](int t) { group.run(SpawnedJob{&process, &go, t}); };
     process = [&](int first) {
       std::vector<int> ready{first};
       std::int64_t my_busy = 0;
