@@ -1,0 +1,74 @@
+// GADGET-2's cubic-spline softened gravity between two point masses, and the TreePM split hook.
+#pragma once
+#include <algorithm>
+#include <limits>
+
+namespace fountain::gravity {
+
+// Softening lengths are given as the Plummer-equivalent eps everywhere (that is what
+// PHYSICS.md and the parameter files quote); the spline reaches Newtonian at h = 2.8 eps.
+inline constexpr double kSplineFactor = 2.8;
+
+constexpr double spline_length(double eps) { return kSplineFactor * eps; }
+
+// Two particles interact with the larger of their softenings: the rule is symmetric in
+// (i, j), so the two forces of a pair are exactly opposite and momentum is conserved.
+constexpr double pair_spline_length(double eps_i, double eps_j) {
+  return spline_length(std::max(eps_i, eps_j));
+}
+
+// The hook for a TreePM short-range force. Today it is the identity: the tree computes the
+// whole force. TreePM will multiply the softened pair force by
+// erfc(r / 2 r_s) + (r / r_s sqrt(pi)) exp(-r^2 / 4 r_s^2) and the potential by
+// erfc(r / 2 r_s) (GADGET-2's `shortrange_table`, tabulated there in u = r / 2 r_s), and
+// the walk will skip nodes farther than cutoff_radius() (GADGET-2: RCUT = 4.5 r_s), whose
+// contribution then comes entirely from the PM mesh. Callers already pass a GravitySplit
+// and ask it for both factors, so enabling it changes this struct only.
+struct GravitySplit {
+  constexpr bool enabled() const { return false; }
+  constexpr double force_factor(double /*r*/) const { return 1.0; }
+  constexpr double potential_factor(double /*r*/) const { return 1.0; }
+  constexpr double cutoff_radius() const { return std::numeric_limits<double>::infinity(); }
+};
+
+// Per unit G m of the source: acceleration = -G m dx force, potential = G m potential,
+// with dx = x_target - x_source.
+struct PairGravity {
+  double force;      // g(r): 1/r^3 beyond the spline length
+  double potential;  // -1/r beyond the spline length
+};
+
+// GADGET-2's piecewise polynomials (forcetree.c), written with the exact fractions whose
+// decimal forms GADGET-2 prints (32/3 for 10.666666666667 and so on), so the pieces join
+// to round-off at u = 1/2 and u = 1. `r2` is passed as well because callers have it and
+// the Newtonian branch, by far the most common, then needs one sqrt only.
+inline PairGravity softened_pair(double r, double r2, double h,
+                                 const GravitySplit& split = GravitySplit{}) {
+  PairGravity out;
+  if (r >= h) {
+    const double r_inv = 1.0 / r;
+    out.force = r_inv / r2;
+    out.potential = -r_inv;
+  } else {
+    const double h_inv = 1.0 / h;
+    const double h_inv3 = h_inv * h_inv * h_inv;
+    const double u = r * h_inv;
+    const double u2 = u * u;
+    if (u < 0.5) {
+      out.force = h_inv3 * (32.0 / 3.0 + u2 * (32.0 * u - 192.0 / 5.0));
+      out.potential = h_inv * (-14.0 / 5.0 + u2 * (16.0 / 3.0 + u2 * (32.0 / 5.0 * u - 48.0 / 5.0)));
+    } else {
+      out.force = h_inv3 * (64.0 / 3.0 - 48.0 * u + 192.0 / 5.0 * u2 - 32.0 / 3.0 * u2 * u -
+                            1.0 / (15.0 * u2 * u));
+      out.potential = h_inv * (-16.0 / 5.0 + 1.0 / (15.0 * u) +
+                               u2 * (32.0 / 3.0 + u * (-16.0 + u * (48.0 / 5.0 - 32.0 / 15.0 * u))));
+    }
+  }
+  if (split.enabled()) {
+    out.force *= split.force_factor(r);
+    out.potential *= split.potential_factor(r);
+  }
+  return out;
+}
+
+}  // namespace fountain::gravity

@@ -1,0 +1,82 @@
+// Octree of source particles with quadrupole moments, and the gather-only walk that gives a target's acceleration.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/Vec3.hpp"
+#include "gravity/GravityKernel.hpp"
+#include "gravity/GravityTypes.hpp"
+
+namespace fountain::gravity {
+
+struct TreeConfig {
+  int max_leaf_size = 8;  // a node with more particles than this is split (unless too deep)
+
+  // Open boundaries only: constructing a tree with periodic = true throws. Periodic runs will
+  // be TreePM, as in GADGET-2: the tree then gives only the short-range force (the
+  // GravitySplit factor cuts it off at a few r_s, far below half the box), so the walk needs
+  // nothing but the nearest image of each node and particle (dx wrapped into
+  // [-box/2, box/2) before the opening test and the kernel); the long range, periodic
+  // images included, comes from the PM mesh. No Ewald correction is planned.
+  bool periodic = false;
+  double box_size = 0.0;
+};
+
+struct WalkConfig {
+  double G = 1.0;             // in internal units
+  double alpha_force = 0.01;  // relative criterion: accept when G M l^2 / r^4 <= alpha |a_old|
+  double theta = 0.5;         // Barnes-Hut angle, used while a target has no |a_old|
+  GravitySplit split{};
+};
+
+// One node. The traceless quadrupole is Q = sum m (3 s s^T - |s|^2 I) with s = x - com, stored
+// as xx, yy, zz, xy, xz, yz.
+struct TreeNode {
+  Vec3 centre;  // geometric centre of the cube
+  double side = 0.0;
+  Vec3 com;
+  double mass = 0.0;
+  std::array<double, 6> quadrupole{};
+  double max_softening = 0.0;  // largest Plummer-equivalent eps of the particles inside
+  std::int32_t first = 0;      // the node's particles are [first, first + count) in tree order
+  std::int32_t count = 0;
+  std::int32_t first_child = -1;  // -1 for a leaf; otherwise the next node in the array
+  std::int32_t next = -1;         // node to visit after this one's subtree; -1 ends the walk
+};
+
+// Built once from the sources (copied, in tree order), then read-only: any number of walks
+// may run on it at once from any threads, and each walk's result depends only on the tree
+// and its target, so per-cell walk tasks are reproducible whatever the thread count.
+class GravityTree {
+ public:
+  GravityTree(std::span<const Vec3> positions, std::span<const double> masses,
+              std::span<const double> softenings, const TreeConfig& config = TreeConfig{});
+
+  GravityResult accelerate(const GravityTarget& target, const WalkConfig& config) const;
+
+  // The same for a group of targets (one engine task per cell of targets will call this).
+  void accelerate(std::span<const GravityTarget> targets, const WalkConfig& config,
+                  std::span<GravityResult> results) const;
+
+  const std::vector<TreeNode>& nodes() const { return nodes_; }
+  // Source index of the particle at each tree position.
+  const std::vector<std::int32_t>& order() const { return index_; }
+  std::size_t size() const { return index_.size(); }
+  const TreeConfig& config() const { return config_; }
+
+ private:
+  void build(std::int32_t first, std::int32_t count, const Vec3& centre, double side, int depth,
+             std::vector<std::int32_t>& scratch, std::span<const Vec3> positions,
+             std::span<const double> masses, std::span<const double> softenings);
+
+  TreeConfig config_;
+  std::vector<TreeNode> nodes_;
+  std::vector<std::int32_t> index_;  // tree order -> source index
+  std::vector<Vec3> pos_;            // sources in tree order
+  std::vector<double> mass_;
+  std::vector<double> eps_;
+};
+
+}  // namespace fountain::gravity
