@@ -216,8 +216,18 @@ InitialConditions read_initial_conditions(const std::string& path) {
   return ic;
 }
 
-void write_initial_conditions(const std::string& path, const GasParticles& gas, const Vec3& box_size,
-                              bool periodic, double time) {
+namespace {
+
+// Common mass of all entries, or 0 if they differ (for /Header/MassTable).
+double common_mass(const std::vector<double>& mass) {
+  if (mass.empty()) return 0.0;
+  for (double m : mass)
+    if (m != mass[0]) return 0.0;
+  return mass[0];
+}
+
+void write_ic_file(const std::string& path, const GasParticles& gas, const ics::DarkMatterParticles* dm,
+                   const Vec3& box_size, bool periodic, double time) {
   const std::size_t n = gas.size();
   const std::string prefix = "cannot create initial conditions " + path + ": ";
   if (n == 0) throw InputError(prefix + "there are no gas particles to write");
@@ -230,6 +240,30 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
   check(gas.u_full.size(), "u_full");
   check(gas.h.size(), "h");
 
+  const std::size_t n_dm = dm != nullptr ? dm->size() : 0;
+  if (dm != nullptr) {
+    auto check_dm = [&](std::size_t size, const char* field) {
+      if (size != n_dm)
+        throw InputError(prefix + fmt::format("dark matter field {} has {} entries, expected {}", field, size, n_dm));
+    };
+    check_dm(dm->mass.size(), "mass");
+    check_dm(dm->x.size(), "x");
+    check_dm(dm->v.size(), "v");
+    for (std::size_t i = 0; i < n_dm; ++i)
+      if (!std::isfinite(dm->mass[i]) || dm->mass[i] <= 0.0)
+        throw InputError(prefix + fmt::format("dark matter particle ID {} has mass {} (must be positive)", dm->id[i],
+                                              dm->mass[i]));
+    // IDs must be unique across both types.
+    std::vector<std::uint64_t> all(gas.id);
+    all.insert(all.end(), dm->id.begin(), dm->id.end());
+    std::sort(all.begin(), all.end());
+    const auto dup = std::adjacent_find(all.begin(), all.end());
+    if (dup != all.end())
+      throw InputError(prefix + fmt::format("particle ID {} is used more than once (IDs must be unique across gas "
+                                            "and dark matter)",
+                                            *dup));
+  }
+
   hdf5::write_file_atomically(path, "initial conditions", [&](File& file) {
     hdf5::write_gadget_header(file, n, {box_size.x, box_size.y, box_size.z}, time);
     // Not a GADGET field; records the boundary conditions the set-up was made for.
@@ -241,7 +275,49 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
     file.write_dataset(gas_dataset("Masses"), gas.mass);
     file.write_dataset(gas_dataset("InternalEnergy"), gas.u_full);
     file.write_dataset(gas_dataset("SmoothingLength"), gas.h);
+    if (dm == nullptr) return;
+
+    // The header as written above counts gas only: replace the counts and the mass table.
+    constexpr std::uint64_t two32 = std::uint64_t{1} << 32;
+    const std::uint64_t counts[2] = {n, n_dm};
+    if (n < two32 && n_dm < two32) {
+      file.write_attribute(kHeader, "NumPart_ThisFile",
+                           std::vector<std::uint32_t>{static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(n_dm),
+                                                      0, 0, 0, 0});
+    } else {
+      file.write_attribute(kHeader, "NumPart_ThisFile", std::vector<std::uint64_t>{n, n_dm, 0, 0, 0, 0});
+    }
+    std::vector<std::uint32_t> low(6, 0), high(6, 0);
+    for (int t = 0; t < 2; ++t) {
+      low[t] = static_cast<std::uint32_t>(counts[t] % two32);
+      high[t] = static_cast<std::uint32_t>(counts[t] / two32);
+    }
+    file.write_attribute(kHeader, "NumPart_Total", low);
+    file.write_attribute(kHeader, "NumPart_Total_HighWord", high);
+    std::vector<double> table(6, 0.0);
+    table[0] = common_mass(gas.mass);
+    table[1] = common_mass(dm->mass);
+    file.write_attribute(kHeader, "MassTable", table);
+
+    const std::string group = "/PartType1";
+    file.create_group(group);
+    file.write_dataset(group + "/Coordinates", dm->x);
+    file.write_dataset(group + "/Velocities", dm->v);
+    file.write_dataset(group + "/ParticleIDs", dm->id);
+    file.write_dataset(group + "/Masses", dm->mass);
   });
+}
+
+}  // namespace
+
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const Vec3& box_size,
+                              bool periodic, double time) {
+  write_ic_file(path, gas, nullptr, box_size, periodic, time);
+}
+
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const ics::DarkMatterParticles& dm,
+                              const Vec3& box_size, bool periodic, double time) {
+  write_ic_file(path, gas, &dm, box_size, periodic, time);
 }
 
 }  // namespace fountain::io

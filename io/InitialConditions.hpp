@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/Vec3.hpp"
+#include "ics/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
@@ -24,5 +25,13 @@ InitialConditions read_initial_conditions(const std::string& path);
 // Writes gas initial conditions in the same layout (used by `fountain ic`).
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const Vec3& box_size,
                               bool periodic, double time = 0.0);
+
+// Writes gas and dark matter: the gas as above, the dark matter as /PartType1 (Coordinates,
+// Velocities, ParticleIDs, Masses); /Header NumPart_ThisFile and NumPart_Total count both
+// types, and MassTable holds each type's particle mass where all its particles share one
+// (0 otherwise; the Masses datasets are written either way). IDs must be unique across both
+// types. read_initial_conditions reads such a file's gas and ignores /PartType1.
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const ics::DarkMatterParticles& dm,
+                              const Vec3& box_size, bool periodic, double time = 0.0);
 
 }  // namespace fountain::io

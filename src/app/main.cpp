@@ -6,6 +6,7 @@
 
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
+#include "ics/RotatingSphere.hpp"
 #include "ics/TestProblems.hpp"
 #include "io/InitialConditions.hpp"
 #include "params/ParameterFile.hpp"
@@ -29,11 +30,21 @@ int main(int argc, char** argv) {
   std::string problem, out_path;
   int resolution = 0;
   double gamma = 5.0 / 3.0;
-  ic->add_option("problem", problem, "sod | sedov | gresho")->required()->check(CLI::IsMember({"sod", "sedov", "gresho"}));
+  ics::RotatingSphereParams sphere;
+  ic->add_option("problem", problem, "sod | sedov | gresho | sphere")
+      ->required()
+      ->check(CLI::IsMember({"sod", "sedov", "gresho", "sphere"}));
   ic->add_option("-o,--output", out_path, "Output HDF5 file")->required();
   ic->add_option("-n,--resolution", resolution,
-                 "Lattice cells per unit length (sod: left state; sedov, gresho: per box side)");
+                 "Lattice cells per unit length (sod: left state; sedov, gresho: per box side); "
+                 "sphere: particles per species (default 4000)");
   ic->add_option("--gamma", gamma, "Adiabatic index");
+  ic->add_option("--mass", sphere.total_mass, "sphere: total mass, gas + DM [Msun/h]")->capture_default_str();
+  ic->add_option("--radius", sphere.radius, "sphere: radius [Mpc/h]")->capture_default_str();
+  ic->add_option("--spin", sphere.spin, "sphere: spin parameter lambda = J|E|^(1/2)/(G M^(5/2))")->capture_default_str();
+  ic->add_option("--thermal-fraction", sphere.thermal_fraction, "sphere: gas specific energy u over |W|/M")
+      ->capture_default_str();
+  ic->add_option("--gas-fraction", sphere.gas_fraction, "sphere: gas mass over total mass")->capture_default_str();
 
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
@@ -51,13 +62,25 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
     } else if (*ic) {
-      ics::ProblemIC p;
-      if (problem == "sod") p = ics::sod_shock(resolution > 0 ? resolution : 32, gamma);
-      else if (problem == "sedov") p = ics::sedov_blast(resolution > 0 ? resolution : 24, gamma);
-      else p = ics::gresho_vortex(resolution > 0 ? resolution : 32, gamma);
-      io::write_initial_conditions(out_path, p.gas, p.box_size, p.periodic);
-      fmt::print(stderr, "wrote {} ({} gas particles, box {} x {} x {})\n", out_path, p.gas.size(), p.box_size.x,
-                 p.box_size.y, p.box_size.z);
+      if (problem == "sphere") {
+        if (resolution > 0) sphere.particles_per_species = resolution;
+        const ics::RotatingSphereIC s = ics::rotating_sphere(sphere);
+        // Isolated: centred on the origin; BoxSize is the enclosing cube's side (informative).
+        const double side = 2.0 * sphere.radius;
+        io::write_initial_conditions(out_path, s.gas, s.dm, {side, side, side}, false);
+        fmt::print(stderr,
+                   "wrote {} ({} gas + {} dark matter particles; omega = {:.6g} km/s per Mpc/h, u = {:.6g} (km/s)^2, "
+                   "W = {:.6g}, spin = {:.6g})\n",
+                   out_path, s.gas.size(), s.dm.size(), s.omega, s.u, s.potential_energy, s.spin);
+      } else {
+        ics::ProblemIC p;
+        if (problem == "sod") p = ics::sod_shock(resolution > 0 ? resolution : 32, gamma);
+        else if (problem == "sedov") p = ics::sedov_blast(resolution > 0 ? resolution : 24, gamma);
+        else p = ics::gresho_vortex(resolution > 0 ? resolution : 32, gamma);
+        io::write_initial_conditions(out_path, p.gas, p.box_size, p.periodic);
+        fmt::print(stderr, "wrote {} ({} gas particles, box {} x {} x {})\n", out_path, p.gas.size(), p.box_size.x,
+                   p.box_size.y, p.box_size.z);
+      }
     } else if (*params_cmd) {
       fmt::print("{}", parameter_reference_markdown());
     }
