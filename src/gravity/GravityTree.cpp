@@ -181,31 +181,22 @@ GravityResult GravityTree::accelerate(const GravityTarget& target, const WalkCon
         const Vec3 dx = t - node.com;
         const double r2 = dot(dx, dx);
         const double l2 = node.side * node.side;
-        const bool open = relative ? config.G * node.mass * l2 > a_crit * r2 * r2 : l2 > theta2 * r2;
+        bool open;
+        if (!relative) {
+          open = l2 > theta2 * r2;
+        } else if (config.criterion == OpeningCriterion::gadget2_monopole) {
+          open = config.G * node.mass * l2 > a_crit * r2 * r2;  // G M l^2 / r^4 > alpha |a_old|
+        } else {
+          open = config.G * node.mass * l2 * node.side > a_crit * r2 * r2 * std::sqrt(r2);  // G M l^3 / r^5 > ...
+        }
         if (!open) visit = Visit::accept;
       }
     }
 
     if (visit == Visit::accept) {
-      // Monopole + quadrupole about the centre of mass (no dipole there):
-      // phi = -G (M / r + d.Q.d / (2 r^5)).
-      const Vec3 d = t - node.com;
-      const double r2 = dot(d, d);
-      const double r = std::sqrt(r2);
-      const double r_inv = 1.0 / r;
-      const double r2_inv = r_inv * r_inv;
-      const double r3_inv = r_inv * r2_inv;
-      const double r5_inv = r3_inv * r2_inv;
-      const auto& q = node.quadrupole;
-      const Vec3 qd{q[0] * d.x + q[3] * d.y + q[4] * d.z, q[3] * d.x + q[1] * d.y + q[5] * d.z,
-                    q[4] * d.x + q[5] * d.y + q[2] * d.z};
-      const double dqd = dot(d, qd);
-      // TreePM will need the split factor's derivatives in the quadrupole term as well
-      // (GADGET-4 does this); scaling the monopole alone is GADGET-2's monopole-only form.
-      const double split_f = config.split.enabled() ? config.split.force_factor(r) : 1.0;
-      const double split_p = config.split.enabled() ? config.split.potential_factor(r) : 1.0;
-      acc += config.G * (split_f * (-node.mass * r3_inv) * d + r5_inv * qd + (-2.5 * dqd * r5_inv * r2_inv) * d);
-      pot -= config.G * (split_p * node.mass * r_inv + 0.5 * dqd * r5_inv);
+      const NodeField f = node_field(t - node.com, node.mass, node.quadrupole, config.G, config.expansion, config.split);
+      acc += f.acceleration;
+      pot += f.potential;
       ++result.node_interactions;
       n = node.next;
     } else if (visit == Visit::skip) {

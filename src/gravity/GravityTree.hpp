@@ -7,6 +7,7 @@
 
 #include "core/Vec3.hpp"
 #include "gravity/GravityKernel.hpp"
+#include "gravity/GravityMultipole.hpp"
 #include "gravity/GravityTypes.hpp"
 
 namespace fountain::gravity {
@@ -24,10 +25,25 @@ struct TreeConfig {
   double box_size = 0.0;
 };
 
+// The relative opening criterion for a node of mass M and side l whose centre of mass is at
+// distance r, for a target with previous acceleration |a_old| (G included). Each form bounds
+// by alpha_force |a_old| the leading neglected term of one expansion order (docs/gravity.md):
+enum class OpeningCriterion {
+  // GADGET-2 (forcetree.c): accept when G M l^2 / r^4 <= alpha |a_old|. That is the size of
+  // the quadrupole term, the first one a monopole-only expansion leaves out; with the
+  // quadrupole included it bounds a term the walk does compute.
+  gadget2_monopole,
+  // GADGET-4 (gwalk.cc, MULTIPOLE_ORDER = 3): accept when G M l^3 / r^5 <= alpha |a_old|, the
+  // size of the octupole term, the first one a monopole + quadrupole expansion leaves out.
+  relative_quadrupole,
+};
+
 struct WalkConfig {
   double G = 1.0;             // in internal units
-  double alpha_force = 0.01;  // relative criterion: accept when G M l^2 / r^4 <= alpha |a_old|
+  double alpha_force = 0.01;  // relative criterion: accept when (see `criterion`) <= alpha |a_old|
   double theta = 0.5;         // Barnes-Hut angle, used while a target has no |a_old|
+  OpeningCriterion criterion = OpeningCriterion::relative_quadrupole;
+  MultipoleOrder expansion = MultipoleOrder::quadrupole;  // terms used for an accepted node
   GravitySplit split{};
 };
 
