@@ -38,8 +38,8 @@ auto double_fields(Gas& g) {
   return std::vector<std::pair<const char*, decltype(&g.mass)>>{
       {"mass", &g.mass},         {"u_full", &g.u_full},   {"u", &g.u},           {"h", &g.h},
       {"rho", &g.rho},           {"rho_msph", &g.rho_msph}, {"h_msph", &g.h_msph}, {"wcount", &g.wcount},
-      {"wcount_dh", &g.wcount_dh}, {"div_v", &g.div_v},   {"pressure", &g.pressure},
-      {"soundspeed", &g.soundspeed}, {"rho_a", &g.rho_a}, {"rho_2ma", &g.rho_2ma}, {"balsara", &g.balsara},
+      {"wcount_dh", &g.wcount_dh}, {"div_v", &g.div_v},
+      {"soundspeed", &g.soundspeed}, {"p_over_rho_a", &g.p_over_rho_a}, {"inv_rho_2ma", &g.inv_rho_2ma}, {"balsara", &g.balsara},
       {"du_dt", &g.du_dt}};
 }
 template <class Gas>

@@ -7,7 +7,7 @@
 
 namespace fountain::io {
 
-inline constexpr int kRestartFormatVersion = 1;
+inline constexpr int kRestartFormatVersion = 2;
 
 struct RestartState {
   GasParticles gas;

@@ -9,35 +9,42 @@ namespace {
 
 // Adds to the sums of the active particles of `a` the contributions of the particles in
 // `block` (positions already relative-ready: plain differences are the nearest images).
-void density_sums(StepContext& ctx, const Cell& a, NeighbourBlock& block) {
+void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
   GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
-  const std::size_t nb = block.size();
-  for (std::size_t i = a.first; i < a.first + a.count; ++i) {
-    if (!ctx.is_active(i)) continue;
+  for_each_active_group(ctx, a, block, false, [&](std::size_t i, NeighbourBlock& near) {
     const Vec3 xi = gas.x[i];
     const Vec3 vi = gas.v[i];
     const double hi = gas.h[i];
-    const double hi2 = hi * hi;
-    const double hi_inv = 1.0 / hi;
     const MsphState si = msph_state(gas, i);
-    DensitySums s;
-    block.distances_to(xi);
-    for (std::size_t k = 0; k < nb; ++k) {
-      const double r2 = block.r2[k];
-      if (r2 >= hi2) continue;
-      const Vec3 dx{xi.x - block.x[k], xi.y - block.y[k], xi.z - block.z[k]};
-      const std::size_t j = block.index[k];
+    DensityLanes lanes;
+    DensityPairs q;
+    int l = 0;
+    const std::size_t n = near.within(xi, hi * hi, false);
+    for (std::size_t m = 0; m < n; ++m) {
+      const std::size_t k = near.hit[m];
+      const std::size_t j = near.index[k];
+      const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
       const Vec3 dv = vi - gas.v[j];
-      if (j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
-      iact_density(dx, dv, r2, hi_inv, gas.mass[j], s);
+      if (p.msph && j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, near.r2[k], p)) continue;
+      q.dx[l] = dx.x, q.dy[l] = dx.y, q.dz[l] = dx.z, q.r2[l] = near.r2[k];
+      q.dvx[l] = dv.x, q.dvy[l] = dv.y, q.dvz[l] = dv.z, q.m[l] = gas.mass[j];
+      if (++l == kLanes) {
+        iact_density_lanes(q, hi, lanes);
+        l = 0;
+      }
     }
+    if (l > 0) {
+      for (; l < kLanes; ++l) q.dx[l] = q.dy[l] = q.dz[l] = q.dvx[l] = q.dvy[l] = q.dvz[l] = q.m[l] = 0.0, q.r2[l] = hi * hi;
+      iact_density_lanes(q, hi, lanes);
+    }
+    const DensitySums s = lanes.total();
     gas.rho[i] += s.rho;
     gas.wcount[i] += s.w;
     gas.wcount_dh[i] += s.w_dh;
     gas.div_v[i] += s.div;
     gas.curl_v[i] += s.curl;
-  }
+  });
 }
 
 }  // namespace

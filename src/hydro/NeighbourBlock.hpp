@@ -1,6 +1,8 @@
 // The particles of a neighbour cell that can reach a cell, gathered into compact arrays.
 #pragma once
+#include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -12,7 +14,8 @@ namespace fountain::hydro {
 struct NeighbourBlock {
   std::vector<double> x, y, z, h2;
   std::vector<std::size_t> index;
-  std::vector<double> r2;  // scratch: squared distances to the particle being updated
+  std::vector<double> r2;        // scratch: squared distances to the particle being updated
+  std::vector<std::uint32_t> hit;  // scratch: the candidates within reach of that particle
 
   void clear() { x.clear(); y.clear(); z.clear(); h2.clear(); index.clear(); }
   void add(const Vec3& p, double h, std::size_t i) {
@@ -37,9 +40,23 @@ struct NeighbourBlock {
       out[k] = dx * dx + dy * dy + dz * dz;
     }
   }
+
+  // Fills `hit` with the candidates closer to p than `reach2` (squared) or, when
+  // `own_h_reaches`, than their own h; without branches, so the scan stays cheap.
+  std::size_t within(const Vec3& p, double reach2, bool own_h_reaches) {
+    distances_to(p);
+    const std::size_t n = size();
+    hit.resize(n);
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < n; ++k) {
+      hit[m] = static_cast<std::uint32_t>(k);
+      m += (r2[k] < reach2) | (own_h_reaches & (r2[k] < h2[k]));
+    }
+    return m;
+  }
 };
 
-// Axis-aligned box of the active particles of a cell.
+// Axis-aligned box of the active particles of a cell or of a group of particles.
 struct ActiveBox {
   Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   double h_max = 0.0;
@@ -49,23 +66,44 @@ struct ActiveBox {
   ActiveBox(const Vec3& l, const Vec3& u, double h) : lo(l), hi(u), h_max(h), empty(h < 0.0) {}
 
   void add(const Vec3& p, double h) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = p[k] < lo[k] ? p[k] : lo[k];
-      hi[k] = p[k] > hi[k] ? p[k] : hi[k];
-    }
-    h_max = h > h_max ? h : h_max;
+    lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+    hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    h_max = std::max(h_max, h);
     empty = false;
   }
   Vec3 centre() const { return (lo + hi) * 0.5; }
-  // Squared distance from p to the box.
+  // Squared distance between this box and another.
+  double distance2(const ActiveBox& o) const {
+    const double dx = std::max(0.0, std::max(o.lo.x - hi.x, lo.x - o.hi.x));
+    const double dy = std::max(0.0, std::max(o.lo.y - hi.y, lo.y - o.hi.y));
+    const double dz = std::max(0.0, std::max(o.lo.z - hi.z, lo.z - o.hi.z));
+    return dx * dx + dy * dy + dz * dz;
+  }
+  // Squared distance from p to the box (written per axis: this is a hot loop).
   double distance2(const Vec3& p) const {
-    double d2 = 0.0;
-    for (int k = 0; k < 3; ++k) {
-      const double d = p[k] < lo[k] ? lo[k] - p[k] : (p[k] > hi[k] ? p[k] - hi[k] : 0.0);
-      d2 += d * d;
-    }
-    return d2;
+    const double dx = std::max(0.0, std::max(lo.x - p.x, p.x - hi.x));
+    const double dy = std::max(0.0, std::max(lo.y - p.y, p.y - hi.y));
+    const double dz = std::max(0.0, std::max(lo.z - p.z, p.z - hi.z));
+    return dx * dx + dy * dy + dz * dz;
   }
 };
+
+// Copies into `near` the candidates of `block` that can reach a particle in `box`: closer to the
+// box than its largest h (density: gather) or, when `own_h_reaches`, than their own h too (force).
+inline void select_near(const NeighbourBlock& block, const ActiveBox& box, bool own_h_reaches,
+                        NeighbourBlock& near) {
+  near.clear();
+  const double reach2 = box.h_max * box.h_max;
+  for (std::size_t k = 0; k < block.size(); ++k) {
+    const double d2 = box.distance2({block.x[k], block.y[k], block.z[k]});
+    if (d2 < reach2 || (own_h_reaches && d2 < block.h2[k])) {
+      near.x.push_back(block.x[k]);
+      near.y.push_back(block.y[k]);
+      near.z.push_back(block.z[k]);
+      near.h2.push_back(block.h2[k]);
+      near.index.push_back(block.index[k]);
+    }
+  }
+}
 
 }  // namespace fountain::hydro

@@ -40,10 +40,9 @@ struct GasParticles {
   std::vector<Vec3> curl_v;
 
   // Prepared for the force loop from the predicted state (after each drift and ghost).
-  std::vector<double> pressure;
   std::vector<double> soundspeed;     // sqrt(gamma (gamma-1) u): depends on u only
-  std::vector<double> rho_a;          // rho^alpha of the momentum equation
-  std::vector<double> rho_2ma;        // rho^(2-alpha)
+  std::vector<double> p_over_rho_a;   // P / rho^alpha of the momentum equation
+  std::vector<double> inv_rho_2ma;    // 1 / rho^(2-alpha)
   std::vector<double> balsara;        // Balsara switch f_i
 
   // Force-loop results.
@@ -64,7 +63,7 @@ struct GasParticles {
     v.resize(n); u.resize(n); h.resize(n); rho.resize(n);
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
-    pressure.resize(n); soundspeed.resize(n); rho_a.resize(n); rho_2ma.resize(n); balsara.resize(n);
+    soundspeed.resize(n); p_over_rho_a.resize(n); inv_rho_2ma.resize(n); balsara.resize(n);
     a_hydro.resize(n); du_dt.resize(n);
     time_bin.resize(n);
     ti_begin.resize(n);

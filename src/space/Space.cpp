@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "core/Error.hpp"
@@ -167,6 +168,51 @@ void Space::rebuild(GasParticles& gas) {
     for (int t : top_) collect_neighbours(leaves_[l], t, neighbours_[l]);
 }
 
+namespace {
+
+// Partitions order[first, first + count) by octant of `mid` (stable, so deterministic) and
+// returns where each octant starts, relative to `first`.
+std::array<std::size_t, 9> partition_octants(const GasParticles& gas, std::size_t first, std::size_t count,
+                                             const Vec3& mid, std::vector<std::size_t>& order,
+                                             std::vector<std::size_t>& scratch) {
+  std::array<std::size_t, 9> start{};
+  auto octant = [&](std::size_t i) {
+    const Vec3& x = gas.x[i];
+    return (x.x >= mid.x ? 4 : 0) + (x.y >= mid.y ? 2 : 0) + (x.z >= mid.z ? 1 : 0);
+  };
+  for (std::size_t k = first; k < first + count; ++k) ++start[octant(order[k]) + 1];
+  for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
+  std::array<std::size_t, 8> fill;
+  for (int o = 0; o < 8; ++o) fill[o] = first + start[o];
+  for (std::size_t k = first; k < first + count; ++k) {
+    const std::size_t i = order[k];
+    scratch[fill[octant(i)]++] = i;
+  }
+  std::copy(scratch.begin() + static_cast<std::ptrdiff_t>(first),
+            scratch.begin() + static_cast<std::ptrdiff_t>(first + count),
+            order.begin() + static_cast<std::ptrdiff_t>(first));
+  return start;
+}
+
+Vec3 octant_corner(const Vec3& lo, const Vec3& half, int o) {
+  return lo + Vec3{(o & 4) ? half.x : 0.0, (o & 2) ? half.y : 0.0, (o & 1) ? half.z : 0.0};
+}
+
+// Orders the particles of a leaf as the octree below it would (without making cells), so that
+// any run of consecutive particles is spatially compact: the SPH loops work in small groups.
+void order_leaf(const GasParticles& gas, std::size_t first, std::size_t count, const Vec3& lo, const Vec3& width,
+                int depth, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch) {
+  if (count <= 4 || depth >= kMaxDepth) return;
+  const Vec3 half = width * 0.5;
+  const std::array<std::size_t, 9> start = partition_octants(gas, first, count, lo + half, order, scratch);
+  for (int o = 0; o < 8; ++o)
+    if (start[o + 1] > start[o])
+      order_leaf(gas, first + start[o], start[o + 1] - start[o], octant_corner(lo, half, o), half, depth + 1,
+                 order, scratch);
+}
+
+}  // namespace
+
 void Space::split(int c, GasParticles& gas, std::vector<std::size_t>& order,
                   std::vector<std::size_t>& scratch) {
   const Cell cell = cells_[static_cast<std::size_t>(c)];
@@ -175,34 +221,20 @@ void Space::split(int c, GasParticles& gas, std::vector<std::size_t>& order,
     // Keep leaves small against the box so the nearest image of cell centres is that of their boxes.
     for (int k = 0; k < 3; ++k) must_split = must_split || cell.width[k] > 0.25 * size_[k];
   }
-  if (!must_split || cell.depth >= kMaxDepth) return;
-
-  const Vec3 mid = cell.centre();
-  std::array<std::size_t, 9> start{};
-  auto octant = [&](std::size_t i) {
-    const Vec3& x = gas.x[i];
-    return (x.x >= mid.x ? 4 : 0) + (x.y >= mid.y ? 2 : 0) + (x.z >= mid.z ? 1 : 0);
-  };
-  for (std::size_t k = cell.first; k < cell.first + cell.count; ++k) ++start[octant(order[k]) + 1];
-  for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
-  std::array<std::size_t, 8> fill;
-  for (int o = 0; o < 8; ++o) fill[o] = cell.first + start[o];
-  for (std::size_t k = cell.first; k < cell.first + cell.count; ++k) {
-    const std::size_t i = order[k];
-    scratch[fill[octant(i)]++] = i;
+  if (!must_split || cell.depth >= kMaxDepth) {
+    order_leaf(gas, cell.first, cell.count, cell.lo, cell.width, cell.depth, order, scratch);
+    return;
   }
-  std::copy(scratch.begin() + static_cast<std::ptrdiff_t>(cell.first),
-            scratch.begin() + static_cast<std::ptrdiff_t>(cell.first + cell.count),
-            order.begin() + static_cast<std::ptrdiff_t>(cell.first));
 
+  const std::array<std::size_t, 9> start =
+      partition_octants(gas, cell.first, cell.count, cell.centre(), order, scratch);
   cells_[static_cast<std::size_t>(c)].leaf = false;
   for (int o = 0; o < 8; ++o) {
     const std::size_t cnt = start[o + 1] - start[o];
     if (cnt == 0) continue;
     Cell child;
     child.width = cell.width * 0.5;
-    child.lo = cell.lo + Vec3{(o & 4) ? child.width.x : 0.0, (o & 2) ? child.width.y : 0.0,
-                              (o & 1) ? child.width.z : 0.0};
+    child.lo = octant_corner(cell.lo, child.width, o);
     child.first = cell.first + start[o];
     child.count = cnt;
     child.parent = c;
