@@ -226,7 +226,7 @@ double common_mass(const std::vector<double>& mass) {
   return mass[0];
 }
 
-void write_ic_file(const std::string& path, const GasParticles& gas, const ics::DarkMatterParticles* dm,
+void write_ic_file(const std::string& path, const GasParticles& gas, const DarkMatterParticles* dm,
                    const Vec3& box_size, bool periodic, double time) {
   const std::size_t n = gas.size();
   const std::string prefix = "cannot create initial conditions " + path + ": ";
@@ -248,7 +248,7 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const ics::
     };
     check_dm(dm->mass.size(), "mass");
     check_dm(dm->x.size(), "x");
-    check_dm(dm->v.size(), "v");
+    check_dm(dm->v_full.size(), "v_full");
     for (std::size_t i = 0; i < n_dm; ++i)
       if (!std::isfinite(dm->mass[i]) || dm->mass[i] <= 0.0)
         throw InputError(prefix + fmt::format("dark matter particle ID {} has mass {} (must be positive)", dm->id[i],
@@ -302,7 +302,7 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const ics::
     const std::string group = "/PartType1";
     file.create_group(group);
     file.write_dataset(group + "/Coordinates", dm->x);
-    file.write_dataset(group + "/Velocities", dm->v);
+    file.write_dataset(group + "/Velocities", dm->v_full);
     file.write_dataset(group + "/ParticleIDs", dm->id);
     file.write_dataset(group + "/Masses", dm->mass);
   });
@@ -315,7 +315,7 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
   write_ic_file(path, gas, nullptr, box_size, periodic, time);
 }
 
-void write_initial_conditions(const std::string& path, const GasParticles& gas, const ics::DarkMatterParticles& dm,
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
                               const Vec3& box_size, bool periodic, double time) {
   write_ic_file(path, gas, &dm, box_size, periodic, time);
 }

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "core/Vec3.hpp"
-#include "ics/DarkMatterParticles.hpp"
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
@@ -31,7 +31,7 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
 // types, and MassTable holds each type's particle mass where all its particles share one
 // (0 otherwise; the Masses datasets are written either way). IDs must be unique across both
 // types. read_initial_conditions reads such a file's gas and ignores /PartType1.
-void write_initial_conditions(const std::string& path, const GasParticles& gas, const ics::DarkMatterParticles& dm,
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
                               const Vec3& box_size, bool periodic, double time = 0.0);
 
 }  // namespace fountain::io

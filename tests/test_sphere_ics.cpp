@@ -51,7 +51,7 @@ AllParticles all_particles(const RotatingSphereIC& ic) {
   }
   for (std::size_t i = 0; i < ic.dm.size(); ++i) {
     a.x.push_back(ic.dm.x[i]);
-    a.v.push_back(ic.dm.v[i]);
+    a.v.push_back(ic.dm.v_full[i]);
     a.m.push_back(ic.dm.mass[i]);
   }
   return a;
@@ -375,7 +375,7 @@ TEST_F(SphereIcsFile, WriteReadRoundTripWithDarkMatter) {
   }
   EXPECT_EQ(f.dataset_info("/PartType1/Coordinates").dims, (std::vector<std::uint64_t>{n_dm, 3}));
   EXPECT_EQ(f.read_vec3("/PartType1/Coordinates"), ic.dm.x);
-  EXPECT_EQ(f.read_vec3("/PartType1/Velocities"), ic.dm.v);
+  EXPECT_EQ(f.read_vec3("/PartType1/Velocities"), ic.dm.v_full);
   EXPECT_EQ(f.read_uint64("/PartType1/ParticleIDs"), ic.dm.id);
   EXPECT_EQ(f.read_doubles("/PartType1/Masses"), ic.dm.mass);
 }

@@ -18,8 +18,8 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-Engine::Engine(const RunConfig& config, GasParticles gas)
-    : config_(config), gas_(std::move(gas)), space_(config.space), executor_(config.threads) {
+Engine::Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm)
+    : config_(config), gas_(std::move(gas)), dm_(std::move(dm)), space_(config.space), executor_(config.threads) {
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
   if (gas_.size() == 0) throw InputError("no gas particles to simulate");

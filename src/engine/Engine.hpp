@@ -6,6 +6,7 @@
 #include "engine/RunConfig.hpp"
 #include "engine/StepContext.hpp"
 #include "engine/TaskTypes.hpp"
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
 #include "tasks/Executor.hpp"
@@ -37,7 +38,7 @@ struct StepInfo {
 
 class Engine {
  public:
-  Engine(const RunConfig& config, GasParticles gas);
+  Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm = {});
   ~Engine();
 
   // First densities (twice, so the MSPH rule sees real densities), forces and timesteps.
@@ -66,6 +67,8 @@ class Engine {
 
   GasParticles& gas() { return gas_; }
   const GasParticles& gas() const { return gas_; }
+  DarkMatterParticles& dark_matter() { return dm_; }
+  const DarkMatterParticles& dark_matter() const { return dm_; }
   const Space& space() const { return space_; }
   const RunConfig& config() const { return config_; }
   const TaskTypes& task_types() const { return types_; }
@@ -88,6 +91,7 @@ class Engine {
 
   RunConfig config_;
   GasParticles gas_;
+  DarkMatterParticles dm_;
   Space space_;
   TimeLine timeline_;
   TaskTypes types_;

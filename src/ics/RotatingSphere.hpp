@@ -8,7 +8,7 @@
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
-#include "ics/DarkMatterParticles.hpp"
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::ics {

@@ -1,4 +1,5 @@
 #include "particles/GasParticles.hpp"
+#include "particles/DarkMatterParticles.hpp"
 
 namespace fountain {
 
@@ -18,14 +19,28 @@ void GasParticles::permute(const std::vector<std::size_t>& order) {
   std::vector<TimeBin> sb;
   apply(id, order, si);
   for (auto* f : {&mass, &u_full, &u, &h, &rho, &rho_msph, &h_msph, &wcount, &wcount_dh, &div_v,
-                  &balsara, &soundspeed, &p_over_rho_a, &inv_rho_2ma, &du_dt})
+                  &balsara, &soundspeed, &p_over_rho_a, &inv_rho_2ma, &du_dt, &potential})
     apply(*f, order, sd);
-  for (auto* f : {&x, &v_full, &v, &curl_v, &a_hydro}) apply(*f, order, sv);
+  for (auto* f : {&x, &v_full, &v, &curl_v, &a_hydro, &a_grav}) apply(*f, order, sv);
   apply(time_bin, order, sb);
   apply(limit_bin, order, sb);
   apply(courant_bin, order, sb);
   apply(wake_bin, order, sb);
   std::vector<std::int64_t> st;
+  apply(ti_begin, order, st);
+}
+
+void DarkMatterParticles::permute(const std::vector<std::size_t>& order) {
+  std::vector<double> sd;
+  std::vector<Vec3> sv;
+  std::vector<std::uint64_t> si;
+  std::vector<TimeBin> sb;
+  std::vector<std::int64_t> st;
+  apply(id, order, si);
+  apply(mass, order, sd);
+  apply(potential, order, sd);
+  for (auto* f : {&x, &v_full, &a_grav}) apply(*f, order, sv);
+  apply(time_bin, order, sb);
   apply(ti_begin, order, st);
 }
 

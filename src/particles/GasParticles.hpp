@@ -49,6 +49,11 @@ struct GasParticles {
   std::vector<Vec3> a_hydro;
   std::vector<double> du_dt;
 
+  // Gravity (zero when gravity is off): acceleration and specific potential at the last
+  // force computation.
+  std::vector<Vec3> a_grav;
+  std::vector<double> potential;
+
   // Time integration.
   std::vector<TimeBin> time_bin;      // step length = 2^time_bin integer time units
   std::vector<std::int64_t> ti_begin; // integer time the current step began
@@ -64,7 +69,7 @@ struct GasParticles {
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
     soundspeed.resize(n); p_over_rho_a.resize(n); inv_rho_2ma.resize(n); balsara.resize(n);
-    a_hydro.resize(n); du_dt.resize(n);
+    a_hydro.resize(n); du_dt.resize(n); a_grav.resize(n); potential.resize(n);
     time_bin.resize(n);
     ti_begin.resize(n);
     courant_bin.resize(n);
