@@ -467,11 +467,11 @@ TEST(GravityMultipole, TheWalkUsesNodeField) {
 // errors"): the quadrupole is right (GravityMultipole.*), but each criterion bounds every
 // accepted node's leading neglected term by alpha |a_old| (times an O(0.1) moment factor),
 // and a target accepts a few hundred nodes, most at l/r = 0.25..0.75, whose errors add up
-// to a median of ~0.2 alpha. Measured at 0.01: median 2.5e-3 / 1.9e-3 with the default
-// relative_quadrupole criterion (1.75e-3 / 1.7e-3 with gadget2_monopole, for ~20% more
+// to a median of ~0.2 alpha. Measured at 0.01: median 2.5e-3 / 1.9e-3 with the
+// relative_quadrupole criterion (1.75e-3 / 1.7e-3 with gadget2_monopole, the default, for ~20% more
 // interactions). So at 0.01 the 99th percentile target is asserted and the median is held
 // to what the criterion gives (3e-3, a margin over the measured figure, not the target);
-// the full target is asserted where it holds: alpha_force = 0.002 for the default criterion,
+// the full target is asserted where it holds: alpha_force = 0.002 for relative_quadrupole,
 // 0.005 for GADGET-2's.
 void expect_accurate(const Problem& p, double alpha, OpeningCriterion criterion, double median_bound, double p99_bound) {
   const auto result = walk(p.tree, targets_of(p.set, &p.a_old), with_alpha(alpha, criterion));

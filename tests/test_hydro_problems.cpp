@@ -114,5 +114,42 @@ TEST(Reproducibility, BitwiseIdenticalOnOneAndTwoThreads) {
   }
 }
 
+// Evrard (1988) collapse with self-gravity, in its usual units (G = M = R = 1). SWIFT drifts
+// 6e-4 in total energy by t = 0.8 at 20k particles; the bound here is the engine issue's 1%
+// to t = 3, at ~2,200 particles so the test stays fast.
+TEST(EvrardCollapse, EnergyAndMomentumConserved) {
+  const auto ic = ics::evrard_sphere(8);
+  RunConfig c = problem_config(ic, 3.0, 0.01, false, 2);
+  c.hydro.neighbours = 50;
+  c.integration.dt_min = 1e-9;
+  c.gravity.enabled = true;
+  c.gravity.G = 1.0;
+  c.gravity.softening_gas = 0.02;
+  Engine e(c, ic.gas);
+  e.initialise();
+  e.drift_all();
+  const Totals start = e.totals();
+  // The discrete sphere's binding energy is close to the continuum's -2/3 G M^2 / R.
+  EXPECT_NEAR(start.potential, -2.0 / 3.0, 0.03);
+  double max_drift = 0.0, p_max = 0.0, kinetic_peak = 0.0;
+  for (double t_check = 0.25; !e.finished(); t_check += 0.25) {
+    while (!e.finished() && e.time() < t_check) e.step();
+    e.drift_all();
+    const Totals now = e.totals();
+    max_drift = std::max(max_drift, std::fabs(now.energy() - start.energy()) / std::fabs(start.energy()));
+    p_max = std::max(p_max, norm(now.momentum));
+    kinetic_peak = std::max(kinetic_peak, now.kinetic);
+  }
+  std::printf("Evrard (%zu particles) to t = 3: largest |dE/E| %.2e, largest |p| %.2e, peak kinetic %.3f\n",
+              ic.gas.size(), max_drift, p_max, kinetic_peak);
+  RecordProperty("energy_drift", std::to_string(max_drift));
+  EXPECT_LT(max_drift, 1e-2);
+  // The collapse really happened: the infall converts a good part of W into kinetic energy.
+  EXPECT_GT(kinetic_peak, 0.1);
+  // The tree's forces are not exactly antisymmetric (docs/gravity.md): momentum stays at
+  // the tree's error level, far below the system's sum of |m v| (~0.5 at the peak).
+  EXPECT_LT(p_max, 1e-3);
+}
+
 }  // namespace
 }  // namespace fountain

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/Error.hpp"
+#include "gravity/GravityLoop.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "timestep/Integration.hpp"
 
@@ -23,7 +24,11 @@ Engine::Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
   if (gas_.size() == 0) throw InputError("no gas particles to simulate");
-  ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_});
+  if (dm_.size() > 0 && !config_.gravity.enabled)
+    throw InputError(fmt::format("the initial conditions hold {} dark matter particles but gravity is off "
+                                 "(set gravity.enabled: true)",
+                                 dm_.size()));
+  ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_, dm_, config_.gravity, {}});
   guess_smoothing_lengths();
 }
 
@@ -56,14 +61,16 @@ void Engine::guess_smoothing_lengths() {
 void Engine::rebuild() {
   // Every particle must sit at the current time before cells are recut.
   drift_all();
-  space_.rebuild(gas_);
+  space_.rebuild(gas_, dm_);
+  auto step_end = [&](TimeBin bin) {
+    return TimeLine::active(bin, ti_current_) ? ti_current_ : TimeLine::step_end(bin, ti_current_);
+  };
   for (int c : space_.leaves()) {
     Cell& cell = space_.cell(c);
     cell.ti_drift = ti_current_;
     IntegerTime end = TimeLine::ticks;
-    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
-      end = std::min(end, TimeLine::active(gas_.time_bin[i], ti_current_) ? ti_current_
-                                                                           : TimeLine::step_end(gas_.time_bin[i], ti_current_));
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) end = std::min(end, step_end(gas_.time_bin[i]));
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) end = std::min(end, step_end(dm_.time_bin[i]));
     cell.ti_end_min = end;
   }
   ctx_->dx_bound = 0.0;
@@ -81,18 +88,29 @@ void Engine::build_graph() {
   std::vector<Pair> dpairs, fpairs;
   std::size_t npairs = 0;
   for (int c : leaves) npairs += space_.neighbours(c).size();
-  graph_.reserve(7 * leaves.size() + 2 * npairs, 2 * npairs);
+  const bool gravity = config_.gravity.enabled;
+  graph_.reserve(9 * leaves.size() + 2 * npairs + 1, 2 * npairs + 3 * leaves.size());
+  std::vector<int> walks;
+  // One tree per step, from every cell's drifted particles; each cell's walk reads it.
+  gravity_tree_task_ = gravity ? graph_.add(types_.gravity_tree, -1, -1, -1) : -1;
   dpairs.reserve(npairs);
   fpairs.reserve(npairs);
   cell_tasks_.assign(ncells, {-1, -1});
   for (int c : leaves) {
     cell_tasks_[c].first = graph_.size();
     drift[c] = graph_.add(types_.drift, c, -1, c);
-    graph_.add(types_.density_self, c, -1, c);
-    for (int n : space_.neighbours(c)) dpairs.push_back({graph_.add(types_.density_pair, c, n, c), c, n});
-    ghost[c] = graph_.add(types_.ghost, c, -1, c);
-    graph_.add(types_.force_self, c, -1, c);
-    for (int n : space_.neighbours(c)) fpairs.push_back({graph_.add(types_.force_pair, c, n, c), c, n});
+    if (space_.cell(c).count > 0) {
+      graph_.add(types_.density_self, c, -1, c);
+      for (int n : space_.neighbours(c)) dpairs.push_back({graph_.add(types_.density_pair, c, n, c), c, n});
+      ghost[c] = graph_.add(types_.ghost, c, -1, c);
+      graph_.add(types_.force_self, c, -1, c);
+      for (int n : space_.neighbours(c)) fpairs.push_back({graph_.add(types_.force_pair, c, n, c), c, n});
+    }
+    if (gravity) {
+      const int walk = graph_.add(types_.gravity, c, -1, c);
+      graph_.depends(drift[c], gravity_tree_task_);
+      graph_.depends(gravity_tree_task_, walk);
+    }
     kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
     graph_.add(types_.timestep, c, -1, c);
     graph_.add(types_.kick_open, c, -1, c);
@@ -122,7 +140,10 @@ std::size_t Engine::activate(Phase phase) {
   cell_active_.assign(ncells, 0);
   std::vector<char> needs_drift(ncells, 0);
   std::size_t active_particles = 0;
+  // Gravity's tree needs every particle at the current time.
+  const bool gravity = config_.gravity.enabled && phase != Phase::Density;
   for (int c : leaves) {
+    if (gravity) needs_drift[c] = 1;
     if (space_.cell(c).ti_end_min != ti_current_) continue;
     cell_active_[c] = 1;
     needs_drift[c] = 1;
@@ -133,12 +154,18 @@ std::size_t Engine::activate(Phase phase) {
       const Cell& cell = space_.cell(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
         active_particles += ctx_->is_active(i) ? 1 : 0;
+      for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
+        active_particles += ctx_->is_active_dm(i) ? 1 : 0;
     }
   // Only the tasks of active cells (and the drifts of their neighbours) are listed for the
   // executor; every ordering between them is a direct dependency or runs through a listed
   // chain (docs/design.md), so nothing else needs to be visited.
   graph_.set_all_active(false);
   step_tasks_.clear();
+  if (gravity) {
+    graph_.task(gravity_tree_task_).active = true;
+    step_tasks_.push_back(gravity_tree_task_);
+  }
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
     if (phase == Phase::Hydro) return type != types_.kick_close && type != types_.timestep && type != types_.kick_open;
@@ -195,6 +222,8 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
     else if (t.type == T.force_self) hydro::force_self(ctx, t.ci);
     else if (t.type == T.force_pair) hydro::force_pair(ctx, t.ci, t.cj);
+    else if (t.type == T.gravity_tree) gravity::build_tree(ctx);
+    else if (t.type == T.gravity) gravity::walk_cell(ctx, t.ci);
     else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
@@ -213,13 +242,21 @@ void Engine::run_graph(StepInfo* info) {
 
 void Engine::initialise() {
   for (auto& b : gas_.time_bin) b = 0;
+  for (auto& b : dm_.time_bin) b = 0;
   ti_current_ = 0;
   for (auto& t : gas_.ti_begin) t = 0;
+  for (auto& t : dm_.ti_begin) t = 0;
   rebuild_pending_ = true;
   // A first density pass gives the MSPH rule real densities to compare; it is repeated
   // (with the cells recut) until every h fits in its cell's reach.
   converge_density(Phase::Density);
   prepare_step(0);
+  if (config_.gravity.enabled) {
+    // The relative opening criterion needs a previous acceleration: a first pass with the
+    // Barnes-Hut criterion gives it (as in GADGET-2).
+    activate(Phase::Hydro);
+    run_graph(nullptr);
+  }
   activate(Phase::Full);
   run_graph(nullptr);
   wake_requested();
@@ -290,6 +327,14 @@ Totals Engine::totals() const {
     t.momentum += gas_.v[i] * m;
     t.kinetic += 0.5 * m * dot(gas_.v[i], gas_.v[i]);
     t.thermal += m * gas_.u[i];
+    t.potential += 0.5 * m * gas_.potential[i];
+  }
+  for (std::size_t i = 0; i < dm_.size(); ++i) {
+    const double m = dm_.mass[i];
+    t.mass += m;
+    t.momentum += dm_.v_full[i] * m;
+    t.kinetic += 0.5 * m * dot(dm_.v_full[i], dm_.v_full[i]);
+    t.potential += 0.5 * m * dm_.potential[i];
   }
   return t;
 }

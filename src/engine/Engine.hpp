@@ -15,13 +15,14 @@
 
 namespace fountain {
 
-// Sums over all gas particles (predicted values), for conservation checks.
+// Sums over all particles (gas at predicted values), for conservation checks.
 struct Totals {
   double mass = 0.0;
   Vec3 momentum;
   double kinetic = 0.0;
   double thermal = 0.0;
-  double energy() const { return kinetic + thermal; }
+  double potential = 0.0;  // gravitational, each pair counted once (zero without gravity)
+  double energy() const { return kinetic + thermal + potential; }
 };
 
 struct StepInfo {
@@ -102,6 +103,7 @@ class Engine {
   std::vector<char> cell_active_;
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
+  int gravity_tree_task_ = -1;
   IntegerTime ti_current_ = 0;
   long long steps_ = 0;
   bool rebuild_pending_ = true;

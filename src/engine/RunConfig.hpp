@@ -4,6 +4,7 @@
 
 #include "core/Units.hpp"
 #include "engine/StepContext.hpp"
+#include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
 #include "space/Space.hpp"
 
@@ -31,6 +32,7 @@ struct RunConfig {
   long long max_steps = 0;
   double smoothing_length_guess = 0.0;
   HydroParams hydro;
+  GravityParams gravity;
   IntegrationParams integration;
   SpaceConfig space;
   Units units;

@@ -2,7 +2,11 @@
 #pragma once
 #include <atomic>
 
+#include <memory>
+
+#include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
 #include "timestep/TimeLine.hpp"
@@ -20,6 +24,11 @@ struct StepContext {
   const HydroParams& hydro;
   const IntegrationParams& integration;
   const TimeLine& timeline;
+  DarkMatterParticles& dm;
+  const GravityParams& gravity;
+
+  // This step's gravity tree, built by the tree task from every particle's drifted position.
+  std::unique_ptr<gravity::GravityTree> tree;
 
   IntegerTime ti_current = 0;
   double dx_bound = 0.0;    // largest distance any particle moved since the rebuild
@@ -29,6 +38,7 @@ struct StepContext {
   std::atomic<int> h_capped{0};             // particles whose h was capped by the cover
 
   bool is_active(std::size_t i) const { return TimeLine::active(gas.time_bin[i], ti_current); }
+  bool is_active_dm(std::size_t i) const { return TimeLine::active(dm.time_bin[i], ti_current); }
 
   // The bin a particle's step would take on the Courant criterion alone, capped by dt_max
   // and alignment: what the limiter compares with the neighbours' bins.

@@ -5,7 +5,8 @@
 namespace fountain {
 
 struct TaskTypes {
-  int drift, density_self, density_pair, ghost, force_self, force_pair, kick_close, timestep, kick_open;
+  int drift, density_self, density_pair, ghost, force_self, force_pair, gravity_tree, gravity, kick_close, timestep,
+      kick_open;
   tasks::TaskTypeRegistry registry;
 
   TaskTypes() {
@@ -15,6 +16,8 @@ struct TaskTypes {
     ghost = registry.add({"ghost", "", "hydro"});
     force_self = registry.add({"force", "self", "hydro"});
     force_pair = registry.add({"force", "pair", "hydro"});
+    gravity_tree = registry.add({"gravity", "tree", "gravity"});
+    gravity = registry.add({"gravity", "walk", "gravity"});
     kick_close = registry.add({"kick", "close", "integration"});
     timestep = registry.add({"timestep", "", "integration"});
     kick_open = registry.add({"kick", "open", "integration"});

@@ -42,7 +42,7 @@ struct WalkConfig {
   double G = 1.0;             // in internal units
   double alpha_force = 0.01;  // relative criterion: accept when (see `criterion`) <= alpha |a_old|
   double theta = 0.5;         // Barnes-Hut angle, used while a target has no |a_old|
-  OpeningCriterion criterion = OpeningCriterion::relative_quadrupole;
+  OpeningCriterion criterion = OpeningCriterion::gadget2_monopole;  // the paper's (GADGET)
   MultipoleOrder expansion = MultipoleOrder::quadrupole;  // terms used for an accepted node
   GravitySplit split{};
 };

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/Error.hpp"
 #include "ics/Lattice.hpp"
 
 namespace fountain::ics {
@@ -90,6 +91,32 @@ ProblemIC gresho_vortex(int cells, double gamma, int depth_cells) {
     const double vphi = gresho_velocity(r);
     set_velocity(ic.gas, i, r > 0.0 ? Vec3{-vphi * dy / r, vphi * dx / r, 0.0} : Vec3{});
     set_energy(ic.gas, i, gresho_pressure(r) / ((gamma - 1.0) * 1.0));
+  }
+  return ic;
+}
+
+ProblemIC evrard_sphere(int cells_per_radius) {
+  if (cells_per_radius < 2) throw InputError("Evrard sphere: need at least 2 lattice cells per radius");
+  const double d = 1.0 / cells_per_radius;
+  std::vector<Vec3> points;
+  for (int a = -cells_per_radius; a < cells_per_radius; ++a)
+    for (int b = -cells_per_radius; b < cells_per_radius; ++b)
+      for (int c = -cells_per_radius; c < cells_per_radius; ++c) {
+        const Vec3 x{(a + 0.5) * d, (b + 0.5) * d, (c + 0.5) * d};
+        const double r = norm(x);
+        // M(<r) = r^2 from a uniform ball's M(<r0) = r0^3: r = r0^(3/2).
+        if (r < 1.0) points.push_back(x * std::sqrt(r));
+      }
+  ProblemIC ic;
+  ic.periodic = false;
+  ic.box_size = {2.0, 2.0, 2.0};
+  const std::size_t n = points.size();
+  ic.gas.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    ic.gas.id[i] = i + 1;
+    ic.gas.mass[i] = 1.0 / static_cast<double>(n);
+    ic.gas.x[i] = points[i];
+    ic.gas.u[i] = ic.gas.u_full[i] = 0.05;
   }
   return ic;
 }

@@ -27,6 +27,11 @@ ProblemIC sedov_blast(int cells, double gamma, double energy = 1.0, double p0 = 
 // depth_cells = 0 takes half the box side (thinner slabs leave too few particles across).
 ProblemIC gresho_vortex(int cells, double gamma, int depth_cells = 0);
 
+// Evrard (1988) adiabatic collapse in its usual units (G = M = R = 1): a gas sphere at rest
+// with rho = 1 / (2 pi r), from a cubic lattice of `cells_per_radius` points per unit length
+// stretched radially (r -> r^(3/2)), and u = 0.05 G M / R. Open boundaries.
+ProblemIC evrard_sphere(int cells_per_radius);
+
 // The Gresho vortex's azimuthal velocity and pressure at radius r.
 double gresho_velocity(double r);
 double gresho_pressure(double r);

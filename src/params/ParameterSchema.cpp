@@ -69,6 +69,16 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("hydro.msph_A_prime", "10", 1, inf, "Energy-contrast threshold A' of the MSPH rule."),
       real("hydro.h_max", "0", 0, inf, "Largest smoothing length allowed; 0 means no limit."),
       integer("hydro.max_h_iterations", "50", 1, 1000, "Iterations of the smoothing-length solver before the run stops with an error."),
+      // gravity
+      boolean("gravity.enabled", "false", "Self-gravity of all particles (tree, open boundaries)."),
+      real("gravity.G", "0", 0, inf, "Newton's constant in internal units; 0 derives it from the unit system."),
+      real("gravity.softening_dark_matter", "0", 0, inf,
+           "Plummer-equivalent softening of dark matter (the spline reaches 2.8 times it); stars take the mean of gas and dark matter."),
+      real("gravity.softening_gas", "0", 0, inf, "Plummer-equivalent softening of gas; 0 takes half the dark matter's (the paper)."),
+      real("gravity.alpha_force", "0.01", 0, 1, "Relative tree opening criterion: accept a node when its neglected term is below alpha_force |a_old|.", true),
+      text("gravity.opening_criterion", "gadget2", "gadget2: G M l^2/r^4 <= alpha |a_old| (GADGET, the paper); quadrupole: G M l^3/r^5 (GADGET-4, matched to the quadrupole expansion).",
+           {"gadget2", "quadrupole"}),
+      real("gravity.eta", "0.08", 0, 10, "Gravitational timestep dt = sqrt(2 eta eps / |a|).", true),
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),

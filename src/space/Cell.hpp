@@ -11,8 +11,10 @@ namespace fountain {
 struct Cell {
   Vec3 lo;                       // lower corner of the box
   Vec3 width;                    // box size
-  std::size_t first = 0;         // particles [first, first + count)
+  std::size_t first = 0;         // gas particles [first, first + count)
   std::size_t count = 0;
+  std::size_t dm_first = 0;      // dark matter particles [dm_first, dm_first + dm_count)
+  std::size_t dm_count = 0;
   std::array<int, 8> children{-1, -1, -1, -1, -1, -1, -1, -1};
   int parent = -1;
   int depth = 0;
@@ -27,7 +29,7 @@ struct Cell {
   double v_max = 0.0;            // largest |v_full|, after the last kick
   double dx_max = 0.0;           // bound on how far a particle moved since the rebuild
   std::int64_t ti_drift = 0;     // integer time its particles were drifted to
-  std::int64_t ti_end_min = 0;   // earliest end of a particle's step in the cell
+  std::int64_t ti_end_min = 0;   // earliest end of a particle's step in the cell (any species)
 
   // Bounding box and largest h of the active particles, set by the first task of each loop
   // on the cell so its pair tasks can skip neighbours out of reach.

@@ -33,28 +33,40 @@ double Space::box_distance(const Cell& a, const Cell& b) const {
   return std::sqrt(d2);
 }
 
-void Space::rebuild(GasParticles& gas) {
+// Sorting state of one rebuild: the permutation being built for each species.
+struct Space::SortState {
+  GasParticles& gas;
+  DarkMatterParticles& dm;
+  std::vector<std::size_t> order, scratch, dm_order, dm_scratch;
+};
+
+void Space::rebuild(GasParticles& gas, DarkMatterParticles& dm) {
   ++rebuilds_;
-  const std::size_t n = gas.size();
+  const std::size_t n = gas.size(), n_dm = dm.size();
   // The box.
   if (config_.periodic) {
     lo_ = {};
     size_ = config_.box_size;
-    for (std::size_t i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k) {
-        double& x = gas.x[i][k];
-        const double L = size_[k];
-        if (x < 0.0 || x >= L) x -= L * std::floor(x / L);
-        if (x >= L) x = 0.0;  // rounding of a tiny negative value
-      }
+    auto wrap = [&](std::vector<Vec3>& xs) {
+      for (Vec3& p : xs)
+        for (int k = 0; k < 3; ++k) {
+          double& x = p[k];
+          const double L = size_[k];
+          if (x < 0.0 || x >= L) x -= L * std::floor(x / L);
+          if (x >= L) x = 0.0;  // rounding of a tiny negative value
+        }
+    };
+    wrap(gas.x);
+    wrap(dm.x);
   } else {
     Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    for (std::size_t i = 0; i < n; ++i)
-      for (int k = 0; k < 3; ++k) {
-        lo[k] = std::min(lo[k], gas.x[i][k]);
-        hi[k] = std::max(hi[k], gas.x[i][k]);
-      }
-    if (n == 0) lo = hi = {};
+    for (const std::vector<Vec3>* xs : {&gas.x, &dm.x})
+      for (const Vec3& p : *xs)
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], p[k]);
+          hi[k] = std::max(hi[k], p[k]);
+        }
+    if (n + n_dm == 0) lo = hi = {};
     double ext = 0.0;
     for (int k = 0; k < 3; ++k) ext = std::max(ext, hi[k] - lo[k]);
     if (ext == 0.0) ext = 1.0;
@@ -74,26 +86,33 @@ void Space::rebuild(GasParticles& gas) {
       w = longest / config_.top_cells;
     } else {
       const double volume = size_.x * size_.y * size_.z;
-      w = std::cbrt(volume * 4.0 * config_.split_size / std::max<double>(1.0, static_cast<double>(n)));
+      w = std::cbrt(volume * 4.0 * config_.split_size / std::max<double>(1.0, static_cast<double>(std::max(n, n_dm))));
     }
     for (int k = 0; k < 3; ++k) ntop[k] = std::clamp(static_cast<int>(std::floor(size_[k] / w)), 1, 128);
   }
   const Vec3 wtop{size_.x / ntop[0], size_.y / ntop[1], size_.z / ntop[2]};
   const std::size_t ntot = static_cast<std::size_t>(ntop[0]) * ntop[1] * ntop[2];
 
-  std::vector<std::size_t> key(n);
-  for (std::size_t i = 0; i < n; ++i) {
+  auto top_cell = [&](const Vec3& x) {
     std::array<int, 3> ix;
-    for (int k = 0; k < 3; ++k)
-      ix[k] = std::clamp(static_cast<int>(std::floor((gas.x[i][k] - lo_[k]) / wtop[k])), 0, ntop[k] - 1);
-    key[i] = (static_cast<std::size_t>(ix[0]) * ntop[1] + ix[1]) * ntop[2] + ix[2];
-  }
-  // Stable counting sort by top cell.
-  std::vector<std::size_t> start(ntot + 1, 0);
-  for (std::size_t i = 0; i < n; ++i) ++start[key[i] + 1];
-  for (std::size_t c = 0; c < ntot; ++c) start[c + 1] += start[c];
-  std::vector<std::size_t> order(n), fill(start.begin(), start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) order[fill[key[i]]++] = i;
+    for (int k = 0; k < 3; ++k) ix[k] = std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / wtop[k])), 0, ntop[k] - 1);
+    return (static_cast<std::size_t>(ix[0]) * ntop[1] + ix[1]) * ntop[2] + ix[2];
+  };
+  // Stable counting sort by top cell: returns where each top cell starts and fills `order`.
+  auto sort_by_top = [&](const std::vector<Vec3>& xs, std::vector<std::size_t>& order) {
+    std::vector<std::size_t> key(xs.size());
+    for (std::size_t i = 0; i < xs.size(); ++i) key[i] = top_cell(xs[i]);
+    std::vector<std::size_t> start(ntot + 1, 0);
+    for (std::size_t k : key) ++start[k + 1];
+    for (std::size_t c = 0; c < ntot; ++c) start[c + 1] += start[c];
+    order.assign(xs.size(), 0);
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < xs.size(); ++i) order[fill[key[i]]++] = i;
+    return start;
+  };
+  SortState st{gas, dm, {}, std::vector<std::size_t>(n), {}, std::vector<std::size_t>(n_dm)};
+  const std::vector<std::size_t> start = sort_by_top(gas.x, st.order);
+  const std::vector<std::size_t> dm_start = sort_by_top(dm.x, st.dm_order);
 
   cells_.clear();
   top_.clear();
@@ -106,13 +125,15 @@ void Space::rebuild(GasParticles& gas) {
         cell.width = wtop;
         cell.first = start[t];
         cell.count = start[t + 1] - start[t];
+        cell.dm_first = dm_start[t];
+        cell.dm_count = dm_start[t + 1] - dm_start[t];
         cells_.push_back(cell);
         top_.push_back(static_cast<int>(cells_.size()) - 1);
       }
-  // Positions are still in the original order: split reads them through `order`.
-  std::vector<std::size_t> scratch(n);
-  for (int t : top_) split(t, gas, order, scratch);
-  gas.permute(order);
+  // Positions are still in the original order: split reads them through the orders.
+  for (int t : top_) split(t, st);
+  gas.permute(st.order);
+  dm.permute(st.dm_order);
 
   // Leaves, their h_max and cover radii; inner nodes take the largest cover below them.
   leaves_.clear();
@@ -141,7 +162,8 @@ void Space::rebuild(GasParticles& gas) {
     }
   }
   for (int c = 0; c < static_cast<int>(cells_.size()); ++c)
-    if (cells_[static_cast<std::size_t>(c)].leaf && cells_[static_cast<std::size_t>(c)].count > 0) {
+    if (cells_[static_cast<std::size_t>(c)].leaf &&
+        cells_[static_cast<std::size_t>(c)].count + cells_[static_cast<std::size_t>(c)].dm_count > 0) {
       leaf_slot_[static_cast<std::size_t>(c)] = static_cast<int>(leaves_.size());
       leaves_.push_back(c);
     }
@@ -165,19 +187,20 @@ void Space::rebuild(GasParticles& gas) {
 
   neighbours_.assign(leaves_.size(), {});
   for (std::size_t l = 0; l < leaves_.size(); ++l)
-    for (int t : top_) collect_neighbours(leaves_[l], t, neighbours_[l]);
+    if (cells_[static_cast<std::size_t>(leaves_[l])].count > 0)
+      for (int t : top_) collect_neighbours(leaves_[l], t, neighbours_[l]);
 }
 
 namespace {
 
 // Partitions order[first, first + count) by octant of `mid` (stable, so deterministic) and
 // returns where each octant starts, relative to `first`.
-std::array<std::size_t, 9> partition_octants(const GasParticles& gas, std::size_t first, std::size_t count,
+std::array<std::size_t, 9> partition_octants(const std::vector<Vec3>& pos, std::size_t first, std::size_t count,
                                              const Vec3& mid, std::vector<std::size_t>& order,
                                              std::vector<std::size_t>& scratch) {
   std::array<std::size_t, 9> start{};
   auto octant = [&](std::size_t i) {
-    const Vec3& x = gas.x[i];
+    const Vec3& x = pos[i];
     return (x.x >= mid.x ? 4 : 0) + (x.y >= mid.y ? 2 : 0) + (x.z >= mid.z ? 1 : 0);
   };
   for (std::size_t k = first; k < first + count; ++k) ++start[octant(order[k]) + 1];
@@ -204,7 +227,7 @@ void order_leaf(const GasParticles& gas, std::size_t first, std::size_t count, c
                 int depth, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch) {
   if (count <= 4 || depth >= kMaxDepth) return;
   const Vec3 half = width * 0.5;
-  const std::array<std::size_t, 9> start = partition_octants(gas, first, count, lo + half, order, scratch);
+  const std::array<std::size_t, 9> start = partition_octants(gas.x, first, count, lo + half, order, scratch);
   for (int o = 0; o < 8; ++o)
     if (start[o + 1] > start[o])
       order_leaf(gas, first + start[o], start[o + 1] - start[o], octant_corner(lo, half, o), half, depth + 1,
@@ -213,36 +236,39 @@ void order_leaf(const GasParticles& gas, std::size_t first, std::size_t count, c
 
 }  // namespace
 
-void Space::split(int c, GasParticles& gas, std::vector<std::size_t>& order,
-                  std::vector<std::size_t>& scratch) {
+void Space::split(int c, SortState& s) {
   const Cell cell = cells_[static_cast<std::size_t>(c)];
-  bool must_split = cell.count > static_cast<std::size_t>(config_.split_size);
-  if (config_.periodic && cell.count > 1) {
+  const std::size_t limit = static_cast<std::size_t>(config_.split_size);
+  bool must_split = cell.count > limit || cell.dm_count > limit;
+  if (config_.periodic && cell.count + cell.dm_count > 1) {
     // Keep leaves small against the box so the nearest image of cell centres is that of their boxes.
     for (int k = 0; k < 3; ++k) must_split = must_split || cell.width[k] > 0.25 * size_[k];
   }
   if (!must_split || cell.depth >= kMaxDepth) {
-    order_leaf(gas, cell.first, cell.count, cell.lo, cell.width, cell.depth, order, scratch);
+    order_leaf(s.gas, cell.first, cell.count, cell.lo, cell.width, cell.depth, s.order, s.scratch);
     return;
   }
 
-  const std::array<std::size_t, 9> start =
-      partition_octants(gas, cell.first, cell.count, cell.centre(), order, scratch);
+  const std::array<std::size_t, 9> start = partition_octants(s.gas.x, cell.first, cell.count, cell.centre(), s.order, s.scratch);
+  const std::array<std::size_t, 9> dm_start =
+      partition_octants(s.dm.x, cell.dm_first, cell.dm_count, cell.centre(), s.dm_order, s.dm_scratch);
   cells_[static_cast<std::size_t>(c)].leaf = false;
   for (int o = 0; o < 8; ++o) {
-    const std::size_t cnt = start[o + 1] - start[o];
-    if (cnt == 0) continue;
+    const std::size_t cnt = start[o + 1] - start[o], dm_cnt = dm_start[o + 1] - dm_start[o];
+    if (cnt + dm_cnt == 0) continue;
     Cell child;
     child.width = cell.width * 0.5;
     child.lo = octant_corner(cell.lo, child.width, o);
     child.first = cell.first + start[o];
     child.count = cnt;
+    child.dm_first = cell.dm_first + dm_start[o];
+    child.dm_count = dm_cnt;
     child.parent = c;
     child.depth = cell.depth + 1;
     cells_.push_back(child);
     const int id = static_cast<int>(cells_.size()) - 1;
     cells_[static_cast<std::size_t>(c)].children[o] = id;
-    split(id, gas, order, scratch);
+    split(id, s);
   }
 }
 

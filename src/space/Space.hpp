@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "core/Vec3.hpp"
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Cell.hpp"
 
@@ -20,16 +21,17 @@ class Space {
  public:
   explicit Space(SpaceConfig config) : config_(config) {}
 
-  // Sorts the particles into cells (every field permuted), builds the octree, the leaves'
-  // cover radii and their neighbour lists. Positions are wrapped into a periodic box.
-  void rebuild(GasParticles& gas);
+  // Sorts the particles of both species into cells (every field permuted), builds the octree,
+  // the leaves' cover radii and their neighbour lists. Positions are wrapped into a periodic box.
+  void rebuild(GasParticles& gas, DarkMatterParticles& dm);
 
   const std::vector<Cell>& cells() const { return cells_; }
   std::vector<Cell>& cells() { return cells_; }
   Cell& cell(int c) { return cells_[static_cast<std::size_t>(c)]; }
   const Cell& cell(int c) const { return cells_[static_cast<std::size_t>(c)]; }
   const std::vector<int>& leaves() const { return leaves_; }
-  // Leaves whose particles may interact with those of leaf `c` (not `c` itself), in a fixed order.
+  // Leaves hold gas, dark matter or both; the hydro tasks skip those without gas.
+  // Leaves whose gas particles may interact with those of leaf `c` (not `c` itself), in a fixed order.
   const std::vector<int>& neighbours(int c) const { return neighbours_[static_cast<std::size_t>(leaf_slot_[static_cast<std::size_t>(c)])]; }
   // The separation a - b of two positions, as its nearest periodic image.
   Vec3 separation(const Vec3& a, const Vec3& b) const {
@@ -52,7 +54,8 @@ class Space {
   double box_distance(const Cell& a, const Cell& b) const;
 
  private:
-  void split(int c, GasParticles& gas, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch);
+  struct SortState;
+  void split(int c, SortState& s);
   void collect_neighbours(int leaf, int node, std::vector<int>& out) const;
   double wrap_delta(double d, int dim) const;
 

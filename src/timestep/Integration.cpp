@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "core/Error.hpp"
 #include "hydro/HydroIact.hpp"
@@ -31,6 +32,12 @@ double kicked_energy(double u, double du_dt, double dt) {
   return next < 0.5 * u ? 0.5 * u : next;
 }
 
+// The gravitational criterion of the paper (GADGET): sqrt(2 eta eps / |a|).
+double gravity_timestep(const GravityParams& g, double softening, const Vec3& a) {
+  const double a_norm = norm(a);
+  return a_norm > 0.0 ? std::sqrt(2.0 * g.eta * softening / a_norm) : std::numeric_limits<double>::infinity();
+}
+
 }  // namespace
 
 namespace integration {
@@ -43,7 +50,7 @@ void drift(StepContext& ctx, int c) {
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (dt != 0.0) {
       gas.x[i] += gas.v_full[i] * dt;
-      gas.v[i] += gas.a_hydro[i] * dt;
+      gas.v[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       gas.u[i] = kicked_energy(gas.u[i], gas.du_dt[i], dt);
       gas.h[i] *= bounded_exp(gas.div_v[i] * dt / 3.0);
       gas.rho[i] *= bounded_exp(-gas.div_v[i] * dt);
@@ -52,6 +59,10 @@ void drift(StepContext& ctx, int c) {
     gas.h_msph[i] = gas.h[i];
     hydro::prepare_force(gas, i, ctx.hydro);
     h_max = std::max(h_max, gas.h[i]);
+  }
+  if (dt != 0.0) {
+    DarkMatterParticles& dm = ctx.dm;
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) dm.x[i] += dm.v_full[i] * dt;
   }
   cell.dx_max += cell.v_max * std::fabs(dt);
   cell.ti_drift = ctx.ti_current;
@@ -67,12 +78,15 @@ void kick_close(StepContext& ctx, int c) {
     // Half of the step that ends now (shorter than its bin's if the particle was woken).
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
-      gas.v_full[i] += gas.a_hydro[i] * dt;
+      gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
     }
     gas.v[i] = gas.v_full[i];
     gas.u[i] = gas.u_full[i];
   }
+  DarkMatterParticles& dm = ctx.dm;
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
+    if (ctx.is_active_dm(i)) dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current));
 }
 
 void timestep(StepContext& ctx, int c) {
@@ -92,7 +106,9 @@ void timestep(StepContext& ctx, int c) {
                                      gas.id[i], ctx.timeline.time(ctx.ti_current), rho, u,
                                      gas.du_dt[i], norm(gas.a_hydro[i])));
       const double cs = hydro::sound_speed(rho, u, p.gamma);
-      const double dt = hydro::courant_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), p);
+      double dt = hydro::courant_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), p);
+      if (ctx.gravity.enabled)
+        dt = std::min(dt, gravity_timestep(ctx.gravity, ctx.gravity.softening_gas, gas.a_hydro[i] + gas.a_grav[i]));
       if (dt < ctx.integration.dt_min)
         throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {}",
                                      gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
@@ -107,6 +123,26 @@ void timestep(StepContext& ctx, int c) {
     }
     ti_end_min = std::min(ti_end_min, TimeLine::step_end(gas.time_bin[i], ctx.ti_current));
   }
+  DarkMatterParticles& dm = ctx.dm;
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
+    if (ctx.is_active_dm(i)) {
+      if (!std::isfinite(norm(dm.a_grav[i])) || !std::isfinite(norm(dm.x[i])) || !std::isfinite(norm(dm.v_full[i])))
+        throw InputError(fmt::format("dark matter particle id {} has a non-finite state at t = {} (|x| = {}, |v| = {}, |a| = {})",
+                                     dm.id[i], ctx.timeline.time(ctx.ti_current), norm(dm.x[i]), norm(dm.v_full[i]),
+                                     norm(dm.a_grav[i])));
+      const double dt = gravity_timestep(ctx.gravity, ctx.gravity.softening_dark_matter, dm.a_grav[i]);
+      if (dt < ctx.integration.dt_min)
+        throw InputError(fmt::format("dark matter particle id {} needs a timestep {} below dt_min = {} at t = {}",
+                                     dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
+      const int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
+      if (bin < 0)
+        throw InputError(fmt::format("dark matter particle id {} needs a timestep {} shorter than one tick of the timeline",
+                                     dm.id[i], dt));
+      dm.time_bin[i] = static_cast<TimeBin>(bin);
+      dm.ti_begin[i] = ctx.ti_current;
+    }
+    ti_end_min = std::min(ti_end_min, TimeLine::step_end(dm.time_bin[i], ctx.ti_current));
+  }
   cell.ti_end_min = ti_end_min;
 }
 
@@ -117,12 +153,15 @@ void kick_open(StepContext& ctx, int c) {
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (ctx.is_active(i)) {
       const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
-      gas.v_full[i] += gas.a_hydro[i] * dt;
+      gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
     }
     v_max = std::max(v_max, norm(gas.v_full[i]));
   }
   cell.v_max = v_max;
+  DarkMatterParticles& dm = ctx.dm;
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
+    if (ctx.is_active_dm(i)) dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.step(dm.time_bin[i]));
 }
 
 void wake(StepContext& ctx, int c) {
@@ -139,7 +178,7 @@ void wake(StepContext& ctx, int c) {
     if (new_end >= old_end) continue;
     // Take back the part of the opening kick that belonged to the cut-off end of the step.
     const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
-    gas.v_full[i] -= gas.a_hydro[i] * undo;
+    gas.v_full[i] -= (gas.a_hydro[i] + gas.a_grav[i]) * undo;
     gas.u_full[i] -= gas.du_dt[i] * undo;
     gas.time_bin[i] = static_cast<TimeBin>(w);
     cell.ti_end_min = std::min(cell.ti_end_min, new_end);

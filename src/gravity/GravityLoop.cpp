@@ -1,0 +1,60 @@
+#include "gravity/GravityLoop.hpp"
+
+#include <vector>
+
+namespace fountain::gravity {
+
+void build_tree(StepContext& ctx) {
+  const GasParticles& gas = ctx.gas;
+  const DarkMatterParticles& dm = ctx.dm;
+  const std::size_t n = gas.size() + dm.size();
+  std::vector<Vec3> x;
+  std::vector<double> m, eps;
+  x.reserve(n);
+  m.reserve(n);
+  eps.reserve(n);
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    x.push_back(gas.x[i]);
+    m.push_back(gas.mass[i]);
+    eps.push_back(ctx.gravity.softening_gas);
+  }
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    x.push_back(dm.x[i]);
+    m.push_back(dm.mass[i]);
+    eps.push_back(ctx.gravity.softening_dark_matter);
+  }
+  ctx.tree = std::make_unique<GravityTree>(x, m, eps);
+}
+
+namespace {
+double old_acceleration(const Vec3& a) {
+  const double a2 = dot(a, a);
+  return a2 > 0.0 ? std::sqrt(a2) : kNoOldAcceleration;
+}
+}  // namespace
+
+void walk_cell(StepContext& ctx, int c) {
+  GasParticles& gas = ctx.gas;
+  DarkMatterParticles& dm = ctx.dm;
+  const Cell& cell = ctx.space.cell(c);
+  const WalkConfig config = ctx.gravity.walk();
+  const GravityTree& tree = *ctx.tree;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (!ctx.is_active(i)) continue;
+    const GravityTarget t{gas.x[i], ctx.gravity.softening_gas, old_acceleration(gas.a_grav[i]),
+                          static_cast<std::int64_t>(i)};
+    const GravityResult r = tree.accelerate(t, config);
+    gas.a_grav[i] = r.acceleration;
+    gas.potential[i] = r.potential;
+  }
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
+    if (!ctx.is_active_dm(i)) continue;
+    const GravityTarget t{dm.x[i], ctx.gravity.softening_dark_matter, old_acceleration(dm.a_grav[i]),
+                          static_cast<std::int64_t>(gas.size() + i)};
+    const GravityResult r = tree.accelerate(t, config);
+    dm.a_grav[i] = r.acceleration;
+    dm.potential[i] = r.potential;
+  }
+}
+
+}  // namespace fountain::gravity

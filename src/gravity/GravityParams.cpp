@@ -1,0 +1,30 @@
+#include "gravity/GravityParams.hpp"
+
+#include <fmt/format.h>
+
+#include "core/Error.hpp"
+#include "core/Units.hpp"
+#include "params/ParameterFile.hpp"
+
+namespace fountain {
+
+GravityParams GravityParams::from(const ParameterFile& p, const Units& units) {
+  GravityParams g;
+  g.enabled = p.flag("gravity.enabled");
+  const double G = p.real("gravity.G");
+  g.G = G > 0.0 ? G : units.gravitational_constant();
+  g.softening_dark_matter = p.real("gravity.softening_dark_matter");
+  g.softening_gas = p.real("gravity.softening_gas");
+  if (g.softening_gas == 0.0) g.softening_gas = 0.5 * g.softening_dark_matter;
+  if (g.enabled && !(g.softening_gas > 0.0))
+    throw InputError(fmt::format("{}: gravity is on but neither 'gravity.softening_gas' nor "
+                                 "'gravity.softening_dark_matter' is set (> 0)",
+                                 p.origin()));
+  g.alpha_force = p.real("gravity.alpha_force");
+  g.eta = p.real("gravity.eta");
+  g.criterion = p.text("gravity.opening_criterion") == "quadrupole" ? gravity::OpeningCriterion::relative_quadrupole
+                                                                    : gravity::OpeningCriterion::gadget2_monopole;
+  return g;
+}
+
+}  // namespace fountain
