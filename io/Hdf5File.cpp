@@ -561,19 +561,25 @@ void write_file_atomically(const std::string& path, const std::string& what,
   }
 }
 
-void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time) {
+void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time,
+                         std::uint64_t n_dm) {
   file.create_group("/Header");
   const std::string h = "/Header";
   constexpr std::uint64_t two32 = std::uint64_t{1} << 32;
-  if (n_gas < two32) {
-    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas), 0, 0, 0, 0, 0});
+  const std::uint64_t counts[2] = {n_gas, n_dm};
+  if (n_gas < two32 && n_dm < two32) {
+    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas),
+                                                                           static_cast<std::uint32_t>(n_dm), 0, 0, 0, 0});
   } else {
-    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>{n_gas, 0, 0, 0, 0, 0});
+    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>{n_gas, n_dm, 0, 0, 0, 0});
   }
-  file.write_attribute(h, "NumPart_Total",
-                       std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas % two32), 0, 0, 0, 0, 0});
-  file.write_attribute(h, "NumPart_Total_HighWord",
-                       std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas / two32), 0, 0, 0, 0, 0});
+  std::vector<std::uint32_t> low(6, 0), high(6, 0);
+  for (int t = 0; t < 2; ++t) {
+    low[t] = static_cast<std::uint32_t>(counts[t] % two32);
+    high[t] = static_cast<std::uint32_t>(counts[t] / two32);
+  }
+  file.write_attribute(h, "NumPart_Total", low);
+  file.write_attribute(h, "NumPart_Total_HighWord", high);
   file.write_attribute(h, "MassTable", std::vector<double>(6, 0.0));
   file.write_attribute(h, "Time", time);
   file.write_attribute(h, "Redshift", 0.0);

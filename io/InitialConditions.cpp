@@ -22,11 +22,21 @@ using hdf5::File;
 
 constexpr const char* kHeader = "/Header";
 constexpr const char* kGas = "/PartType0";
+constexpr const char* kDarkMatter = "/PartType1";
 
-std::string gas_dataset(const char* name) { return std::string(kGas) + "/" + name; }
+// One particle type of the GADGET layout: its index in the /Header arrays, its group and
+// what the messages call it. The readers below are written once for every type.
+struct Species {
+  int type;
+  const char* group;
+  const char* noun;
+  std::string dataset(const char* name) const { return std::string(group) + "/" + name; }
+};
+constexpr Species kGasSpecies{0, kGas, "gas"};
+constexpr Species kDarkMatterSpecies{1, kDarkMatter, "dark matter"};
 
 // Checks that `dataset` has n rows (and 3 columns when `vector` is set) before reading it.
-void check_shape(const File& file, const std::string& dataset, std::uint64_t n, bool vector) {
+void check_shape(const File& file, const Species& sp, const std::string& dataset, std::uint64_t n, bool vector) {
   const hdf5::DatasetInfo info = file.dataset_info(dataset);
   const std::size_t want_rank = vector ? 2 : 1;
   if (info.dims.size() != want_rank || (vector && info.dims[1] != 3)) {
@@ -35,15 +45,32 @@ void check_shape(const File& file, const std::string& dataset, std::uint64_t n, 
     file.fail(dataset, fmt::format("has shape ({}), expected {}", shape, vector ? "N x 3" : "N"));
   }
   if (info.dims[0] != n)
-    file.fail(dataset, fmt::format("has {} entries but /Header/NumPart_ThisFile[0] announces {} gas particles",
-                                   info.dims[0], n));
+    file.fail(dataset, fmt::format("has {} entries but /Header/NumPart_ThisFile[{}] announces {} {} particles",
+                                   info.dims[0], sp.type, n, sp.noun));
 }
 
-std::vector<Vec3> read_vectors(const File& file, const char* name, std::uint64_t n,
-                               const std::vector<std::uint64_t>& ids, const char* what) {
-  const std::string dataset = gas_dataset(name);
+// The ParticleIDs of one type; an ID that appears twice within the type is an error.
+std::vector<std::uint64_t> read_ids(const File& file, const Species& sp, std::uint64_t n) {
+  const std::string dataset = sp.dataset("ParticleIDs");
   if (!file.exists(dataset)) file.fail(dataset, "dataset not found");
-  check_shape(file, dataset, n, true);
+  check_shape(file, sp, dataset, n, false);
+  const std::vector<std::uint64_t> ids = file.read_uint64(dataset);
+  std::vector<std::size_t> order(ids.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return ids[a] != ids[b] ? ids[a] < ids[b] : a < b; });
+  for (std::size_t k = 1; k < order.size(); ++k)
+    if (ids[order[k]] == ids[order[k - 1]])
+      file.fail(dataset, fmt::format("particle ID {} appears more than once (entries {} and {}); IDs must be unique",
+                                     ids[order[k]], order[k - 1], order[k]));
+  return ids;
+}
+
+std::vector<Vec3> read_vectors(const File& file, const Species& sp, const char* name, std::uint64_t n,
+                               const std::vector<std::uint64_t>& ids, const char* what) {
+  const std::string dataset = sp.dataset(name);
+  if (!file.exists(dataset)) file.fail(dataset, "dataset not found");
+  check_shape(file, sp, dataset, n, true);
   std::vector<Vec3> values = file.read_vec3(dataset);
   for (std::size_t i = 0; i < values.size(); ++i) {
     const Vec3& v = values[i];
@@ -53,10 +80,93 @@ std::vector<Vec3> read_vectors(const File& file, const char* name, std::uint64_t
   return values;
 }
 
-std::vector<double> read_scalars(const File& file, const char* name, std::uint64_t n) {
-  const std::string dataset = gas_dataset(name);
-  check_shape(file, dataset, n, false);
+std::vector<double> read_scalars(const File& file, const Species& sp, const char* name, std::uint64_t n) {
+  const std::string dataset = sp.dataset(name);
+  check_shape(file, sp, dataset, n, false);
   return file.read_doubles(dataset);
+}
+
+// The Masses dataset, or else the type's /Header/MassTable entry; every mass must be positive.
+std::vector<double> read_masses(const File& file, const Species& sp, std::uint64_t n,
+                                const std::vector<std::uint64_t>& ids, const std::vector<double>* mass_table) {
+  const std::string dataset = sp.dataset("Masses");
+  if (file.exists(dataset)) {
+    std::vector<double> mass = read_scalars(file, sp, "Masses", n);
+    for (std::size_t i = 0; i < mass.size(); ++i)
+      if (!std::isfinite(mass[i]) || mass[i] <= 0.0)
+        file.fail(dataset, fmt::format("particle ID {} has mass {} (must be positive)", ids[i], mass[i]));
+    return mass;
+  }
+  const auto t = static_cast<std::size_t>(sp.type);
+  if (mass_table == nullptr)
+    file.fail(dataset, fmt::format("dataset not found and /Header has no MassTable: the {} masses are missing", sp.noun));
+  if (mass_table->size() <= t)
+    file.fail(dataset, fmt::format("dataset not found and /Header/MassTable has no entry {}: the {} masses are missing",
+                                   sp.type, sp.noun));
+  const double table_mass = (*mass_table)[t];
+  if (table_mass == 0.0)
+    file.fail(dataset, fmt::format("dataset not found and /Header/MassTable[{}] is 0: the {} masses are missing",
+                                   sp.type, sp.noun));
+  if (!std::isfinite(table_mass) || table_mass < 0.0)
+    file.fail("/Header/MassTable", fmt::format("entry {} ({}) is {} (must be positive)", sp.type, sp.noun, table_mass));
+  return std::vector<double>(n, table_mass);
+}
+
+// NumPart_ThisFile[type] (0 where the array is shorter), checked against NumPart_Total (with
+// its high word) when the file has one.
+std::uint64_t particle_count(const File& file, const std::vector<std::uint64_t>& this_file, const Species& sp) {
+  const auto t = static_cast<std::size_t>(sp.type);
+  const std::uint64_t n = t < this_file.size() ? this_file[t] : 0;
+  if (file.has_attribute(kHeader, "NumPart_Total")) {
+    const std::vector<std::uint64_t> total = file.read_attribute_uint64(kHeader, "NumPart_Total");
+    std::uint64_t high = 0;
+    if (file.has_attribute(kHeader, "NumPart_Total_HighWord")) {
+      const std::vector<std::uint64_t> hw = file.read_attribute_uint64(kHeader, "NumPart_Total_HighWord");
+      if (t < hw.size()) high = hw[t];
+    }
+    if (t < total.size()) {
+      const std::uint64_t n_total = total[t] + (high << 32);
+      if (n_total != n)
+        file.fail("/Header/NumPart_Total", fmt::format("announces {} {} particles but NumPart_ThisFile[{}] is {}",
+                                                       n_total, sp.noun, sp.type, n));
+    }
+  }
+  return n;
+}
+
+// Reads the dark matter of /PartType1 (empty when NumPart_ThisFile[1] is 0).
+DarkMatterParticles read_dark_matter(const File& file, std::uint64_t n, const std::vector<double>* mass_table) {
+  const Species& sp = kDarkMatterSpecies;
+  DarkMatterParticles dm;
+  if (n == 0) return dm;
+  if (!file.exists(sp.group))
+    file.fail(sp.group, fmt::format("group not found, but /Header/NumPart_ThisFile[1] announces {} dark matter "
+                                    "particles",
+                                    n));
+  const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
+  const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
+  const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
+  const std::vector<double> mass = read_masses(file, sp, n, ids, mass_table);
+  dm.resize(n);  // a_grav, potential, time_bin and ti_begin start at zero
+  dm.id = ids;
+  dm.mass = mass;
+  dm.x = x;
+  dm.v_full = v;
+  return dm;
+}
+
+// IDs must be unique across the types: names the first dark matter particle whose ID a gas
+// particle also uses.
+void check_ids_across_species(const File& file, const GasParticles& gas, const DarkMatterParticles& dm) {
+  if (dm.size() == 0) return;
+  std::vector<std::uint64_t> gas_ids(gas.id);
+  std::sort(gas_ids.begin(), gas_ids.end());
+  for (std::size_t i = 0; i < dm.size(); ++i)
+    if (std::binary_search(gas_ids.begin(), gas_ids.end(), dm.id[i]))
+      file.fail(kDarkMatterSpecies.dataset("ParticleIDs"),
+                fmt::format("particle ID {} (entry {}) is also used by a gas particle in {}; IDs must be unique "
+                            "across gas and dark matter",
+                            dm.id[i], i, kGasSpecies.dataset("ParticleIDs")));
 }
 
 }  // namespace
@@ -74,7 +184,6 @@ InitialConditions read_initial_conditions(const std::string& path) {
   // --- Header ---------------------------------------------------------------------------
   const std::vector<std::uint64_t> this_file = file.read_attribute_uint64(kHeader, "NumPart_ThisFile");
   if (this_file.empty()) file.fail("/Header/NumPart_ThisFile", "is empty");
-  const std::uint64_t n = this_file[0];
 
   if (file.has_attribute(kHeader, "NumFilesPerSnapshot")) {
     const std::vector<std::uint64_t> files = file.read_attribute_uint64(kHeader, "NumFilesPerSnapshot");
@@ -84,23 +193,14 @@ InitialConditions read_initial_conditions(const std::string& path) {
                             "combine them into one file",
                             files[0]));
   }
-  if (file.has_attribute(kHeader, "NumPart_Total")) {
-    const std::vector<std::uint64_t> total = file.read_attribute_uint64(kHeader, "NumPart_Total");
-    std::uint64_t high = 0;
-    if (file.has_attribute(kHeader, "NumPart_Total_HighWord")) {
-      const std::vector<std::uint64_t> hw = file.read_attribute_uint64(kHeader, "NumPart_Total_HighWord");
-      if (!hw.empty()) high = hw[0];
-    }
-    if (!total.empty()) {
-      const std::uint64_t total_gas = total[0] + (high << 32);
-      if (total_gas != n)
-        file.fail("/Header/NumPart_Total",
-                  fmt::format("announces {} gas particles but NumPart_ThisFile[0] is {}", total_gas, n));
-    }
-  }
+  const std::uint64_t n = particle_count(file, this_file, kGasSpecies);
+  const std::uint64_t n_dm = particle_count(file, this_file, kDarkMatterSpecies);
   if (n == 0)
     file.fail("/Header/NumPart_ThisFile",
-              "has no gas particles (entry 0 is 0); Fountain needs gas particles in /PartType0");
+              n_dm == 0 ? std::string("has no gas particles (entry 0 is 0); Fountain needs gas particles in /PartType0")
+                        : fmt::format("has no gas particles (entry 0 is 0, entry 1 announces {} dark matter "
+                                      "particles); Fountain needs gas particles in /PartType0",
+                                      n_dm));
 
   if (file.has_attribute(kHeader, "Flag_Entropy_ICs")) {
     for (double flag : file.read_attribute_doubles(kHeader, "Flag_Entropy_ICs"))
@@ -130,67 +230,37 @@ InitialConditions read_initial_conditions(const std::string& path) {
     if (!std::isfinite(ic.time)) file.fail("/Header/Time", fmt::format("is {} (must be finite)", ic.time));
   }
 
-  double table_mass = 0.0;
+  std::vector<double> mass_table;
   const bool has_mass_table = file.has_attribute(kHeader, "MassTable");
   if (has_mass_table) {
-    const std::vector<double> table = file.read_attribute_doubles(kHeader, "MassTable");
-    if (table.empty()) file.fail("/Header/MassTable", "is empty");
-    table_mass = table[0];
+    mass_table = file.read_attribute_doubles(kHeader, "MassTable");
+    if (mass_table.empty()) file.fail("/Header/MassTable", "is empty");
   }
+  const std::vector<double>* table = has_mass_table ? &mass_table : nullptr;
 
   // --- Gas particles ------------------------------------------------------------------
+  const Species& sp = kGasSpecies;
   if (!file.exists(kGas))
     file.fail(kGas, fmt::format("group not found, but /Header/NumPart_ThisFile[0] announces {} gas particles", n));
 
-  const std::string ids_name = gas_dataset("ParticleIDs");
-  if (!file.exists(ids_name)) file.fail(ids_name, "dataset not found");
-  check_shape(file, ids_name, n, false);
-  const std::vector<std::uint64_t> ids = file.read_uint64(ids_name);
-  {
-    std::vector<std::size_t> order(ids.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-      return ids[a] != ids[b] ? ids[a] < ids[b] : a < b;
-    });
-    for (std::size_t k = 1; k < order.size(); ++k)
-      if (ids[order[k]] == ids[order[k - 1]])
-        file.fail(ids_name, fmt::format("particle ID {} appears more than once (entries {} and {}); IDs must be unique",
-                                        ids[order[k]], order[k - 1], order[k]));
-  }
+  const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
+  const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
+  const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
+  const std::vector<double> mass = read_masses(file, sp, n, ids, table);
 
-  const std::vector<Vec3> x = read_vectors(file, "Coordinates", n, ids, "coordinates");
-  const std::vector<Vec3> v = read_vectors(file, "Velocities", n, ids, "velocity");
-
-  std::vector<double> mass;
-  const std::string mass_name = gas_dataset("Masses");
-  if (file.exists(mass_name)) {
-    mass = read_scalars(file, "Masses", n);
-    for (std::size_t i = 0; i < mass.size(); ++i)
-      if (!std::isfinite(mass[i]) || mass[i] <= 0.0)
-        file.fail(mass_name, fmt::format("particle ID {} has mass {} (must be positive)", ids[i], mass[i]));
-  } else if (!has_mass_table) {
-    file.fail(mass_name, "dataset not found and /Header has no MassTable: the gas masses are missing");
-  } else if (table_mass == 0.0) {
-    file.fail(mass_name, "dataset not found and /Header/MassTable[0] is 0: the gas masses are missing");
-  } else if (!std::isfinite(table_mass) || table_mass < 0.0) {
-    file.fail("/Header/MassTable", fmt::format("entry 0 (gas) is {} (must be positive)", table_mass));
-  } else {
-    mass.assign(n, table_mass);
-  }
-
-  const std::string u_name = gas_dataset("InternalEnergy");
+  const std::string u_name = kGasSpecies.dataset("InternalEnergy");
   if (!file.exists(u_name)) file.fail(u_name, "dataset not found (the gas needs a specific internal energy)");
-  const std::vector<double> u = read_scalars(file, "InternalEnergy", n);
+  const std::vector<double> u = read_scalars(file, sp, "InternalEnergy", n);
   for (std::size_t i = 0; i < u.size(); ++i)
     if (!std::isfinite(u[i]) || u[i] <= 0.0)
       file.fail(u_name,
                 fmt::format("particle ID {} has internal energy {} (must be positive and finite)", ids[i], u[i]));
 
   std::vector<double> h;
-  const std::string h_name = gas_dataset("SmoothingLength");
+  const std::string h_name = kGasSpecies.dataset("SmoothingLength");
   ic.has_smoothing_length = file.exists(h_name);
   if (ic.has_smoothing_length) {
-    h = read_scalars(file, "SmoothingLength", n);
+    h = read_scalars(file, sp, "SmoothingLength", n);
     for (std::size_t i = 0; i < h.size(); ++i)
       if (!std::isfinite(h[i]) || h[i] < 0.0)
         file.fail(h_name, fmt::format("particle ID {} has smoothing length {} (must be finite and non-negative)",
@@ -213,6 +283,10 @@ InitialConditions read_initial_conditions(const std::string& path) {
     gas.h[i] = h[i];
     gas.time_bin[i] = 0;
   }
+
+  // --- Dark matter ----------------------------------------------------------------------
+  ic.dm = read_dark_matter(file, n_dm, table);
+  check_ids_across_species(file, ic.gas, ic.dm);
   return ic;
 }
 
@@ -265,46 +339,30 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const DarkM
   }
 
   hdf5::write_file_atomically(path, "initial conditions", [&](File& file) {
-    hdf5::write_gadget_header(file, n, {box_size.x, box_size.y, box_size.z}, time);
+    hdf5::write_gadget_header(file, n, {box_size.x, box_size.y, box_size.z}, time, n_dm);
     // Not a GADGET field; records the boundary conditions the set-up was made for.
     file.write_attribute(kHeader, "Periodic", periodic ? 1 : 0);
     file.create_group(kGas);
-    file.write_dataset(gas_dataset("Coordinates"), gas.x);
-    file.write_dataset(gas_dataset("Velocities"), gas.v_full);
-    file.write_dataset(gas_dataset("ParticleIDs"), gas.id);
-    file.write_dataset(gas_dataset("Masses"), gas.mass);
-    file.write_dataset(gas_dataset("InternalEnergy"), gas.u_full);
-    file.write_dataset(gas_dataset("SmoothingLength"), gas.h);
+    file.write_dataset(kGasSpecies.dataset("Coordinates"), gas.x);
+    file.write_dataset(kGasSpecies.dataset("Velocities"), gas.v_full);
+    file.write_dataset(kGasSpecies.dataset("ParticleIDs"), gas.id);
+    file.write_dataset(kGasSpecies.dataset("Masses"), gas.mass);
+    file.write_dataset(kGasSpecies.dataset("InternalEnergy"), gas.u_full);
+    file.write_dataset(kGasSpecies.dataset("SmoothingLength"), gas.h);
     if (dm == nullptr) return;
 
-    // The header as written above counts gas only: replace the counts and the mass table.
-    constexpr std::uint64_t two32 = std::uint64_t{1} << 32;
-    const std::uint64_t counts[2] = {n, n_dm};
-    if (n < two32 && n_dm < two32) {
-      file.write_attribute(kHeader, "NumPart_ThisFile",
-                           std::vector<std::uint32_t>{static_cast<std::uint32_t>(n), static_cast<std::uint32_t>(n_dm),
-                                                      0, 0, 0, 0});
-    } else {
-      file.write_attribute(kHeader, "NumPart_ThisFile", std::vector<std::uint64_t>{n, n_dm, 0, 0, 0, 0});
-    }
-    std::vector<std::uint32_t> low(6, 0), high(6, 0);
-    for (int t = 0; t < 2; ++t) {
-      low[t] = static_cast<std::uint32_t>(counts[t] % two32);
-      high[t] = static_cast<std::uint32_t>(counts[t] / two32);
-    }
-    file.write_attribute(kHeader, "NumPart_Total", low);
-    file.write_attribute(kHeader, "NumPart_Total_HighWord", high);
+    // Each type's common mass in the table (the header as written above has zeros).
     std::vector<double> table(6, 0.0);
     table[0] = common_mass(gas.mass);
     table[1] = common_mass(dm->mass);
     file.write_attribute(kHeader, "MassTable", table);
 
-    const std::string group = "/PartType1";
-    file.create_group(group);
-    file.write_dataset(group + "/Coordinates", dm->x);
-    file.write_dataset(group + "/Velocities", dm->v_full);
-    file.write_dataset(group + "/ParticleIDs", dm->id);
-    file.write_dataset(group + "/Masses", dm->mass);
+    const Species& sp = kDarkMatterSpecies;
+    file.create_group(sp.group);
+    file.write_dataset(sp.dataset("Coordinates"), dm->x);
+    file.write_dataset(sp.dataset("Velocities"), dm->v_full);
+    file.write_dataset(sp.dataset("ParticleIDs"), dm->id);
+    file.write_dataset(sp.dataset("Masses"), dm->mass);
   });
 }
 

@@ -1,4 +1,4 @@
-// Reading and writing gas initial conditions in the GADGET HDF5 layout.
+// Reading and writing gas and dark matter initial conditions in the GADGET HDF5 layout.
 #pragma once
 #include <string>
 
@@ -10,16 +10,20 @@ namespace fountain::io {
 
 struct InitialConditions {
   GasParticles gas;          // id, mass, x, v_full (= v), u_full (= u), h (0 where absent)
+  DarkMatterParticles dm;    // id, mass, x, v_full (empty when the file has none)
   Vec3 box_size;             // /Header/BoxSize (scalar or 3-vector in the file)
   double time = 0.0;         // /Header/Time
   bool has_smoothing_length = false;
 };
 
-// Reads /Header and /PartType0 (Coordinates, Velocities, ParticleIDs, Masses or the
-// MassTable, InternalEnergy, optional SmoothingLength). Any problem -- missing or
-// truncated file, missing group or dataset, wrong shape, a count that disagrees with the
-// header, zero gas particles, NaN/inf or non-positive mass or energy -- throws InputError
-// naming the file, the dataset and (for bad values) the particle ID.
+// Reads /Header, /PartType0 (Coordinates, Velocities, ParticleIDs, Masses or the
+// MassTable[0], InternalEnergy, optional SmoothingLength) and, when NumPart_ThisFile[1] > 0,
+// /PartType1 (Coordinates, Velocities, ParticleIDs, Masses or the MassTable[1]); other
+// particle types are ignored. Any problem -- missing or truncated file, missing group or
+// dataset, wrong shape, a count that disagrees with the header, no gas particles (dark
+// matter alone is refused), NaN/inf or non-positive mass or energy, an ID used twice within
+// a type or by both gas and dark matter -- throws InputError naming the file, the dataset
+// and (for bad values) the particle ID.
 InitialConditions read_initial_conditions(const std::string& path);
 
 // Writes gas initial conditions in the same layout (used by `fountain ic`).
@@ -30,7 +34,7 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
 // Velocities, ParticleIDs, Masses); /Header NumPart_ThisFile and NumPart_Total count both
 // types, and MassTable holds each type's particle mass where all its particles share one
 // (0 otherwise; the Masses datasets are written either way). IDs must be unique across both
-// types. read_initial_conditions reads such a file's gas and ignores /PartType1.
+// types. read_initial_conditions reads both back.
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
                               const Vec3& box_size, bool periodic, double time = 0.0);
 

@@ -2,8 +2,13 @@
 
 #include <fmt/format.h>
 
+#include <concepts>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <string>
+#include <type_traits>
+#include <vector>
 
 #include "core/Error.hpp"
 #include "io/Hdf5File.hpp"
@@ -32,29 +37,120 @@ class Checksum {
   std::uint64_t hash_ = 1469598103934665603ULL;
 };
 
-// The double fields of the gas, by name, in the order they are checksummed.
-template <class Gas>
-auto double_fields(Gas& g) {
-  return std::vector<std::pair<const char*, decltype(&g.mass)>>{
-      {"mass", &g.mass},         {"u_full", &g.u_full},   {"u", &g.u},           {"h", &g.h},
-      {"rho", &g.rho},           {"rho_msph", &g.rho_msph}, {"h_msph", &g.h_msph}, {"wcount", &g.wcount},
-      {"wcount_dh", &g.wcount_dh}, {"div_v", &g.div_v},
-      {"soundspeed", &g.soundspeed}, {"p_over_rho_a", &g.p_over_rho_a}, {"inv_rho_2ma", &g.inv_rho_2ma}, {"balsara", &g.balsara},
-      {"du_dt", &g.du_dt}};
+// Every field of each particle type, by name, in the order it is stored and checksummed:
+// `fn(name, field)` is called once per field. A field added to a particle type must be
+// added here, or a restarted run would not continue bit for bit.
+template <class Gas, class Fn>
+  requires std::same_as<std::remove_const_t<Gas>, GasParticles>
+void for_each_field(Gas& g, Fn&& fn) {
+  fn("id", g.id);
+  fn("ti_begin", g.ti_begin);
+  fn("mass", g.mass);
+  fn("u_full", g.u_full);
+  fn("u", g.u);
+  fn("h", g.h);
+  fn("rho", g.rho);
+  fn("rho_msph", g.rho_msph);
+  fn("h_msph", g.h_msph);
+  fn("wcount", g.wcount);
+  fn("wcount_dh", g.wcount_dh);
+  fn("div_v", g.div_v);
+  fn("soundspeed", g.soundspeed);
+  fn("p_over_rho_a", g.p_over_rho_a);
+  fn("inv_rho_2ma", g.inv_rho_2ma);
+  fn("balsara", g.balsara);
+  fn("du_dt", g.du_dt);
+  fn("potential", g.potential);
+  fn("x", g.x);
+  fn("v_full", g.v_full);
+  fn("v", g.v);
+  fn("curl_v", g.curl_v);
+  fn("a_hydro", g.a_hydro);
+  fn("a_grav", g.a_grav);
+  fn("time_bin", g.time_bin);
+  fn("courant_bin", g.courant_bin);
+  fn("limit_bin", g.limit_bin);
+  fn("wake_bin", g.wake_bin);
 }
-template <class Gas>
-auto vector_fields(Gas& g) {
-  return std::vector<std::pair<const char*, decltype(&g.x)>>{
-      {"x", &g.x}, {"v_full", &g.v_full}, {"v", &g.v}, {"curl_v", &g.curl_v}, {"a_hydro", &g.a_hydro}};
+
+template <class Dm, class Fn>
+  requires std::same_as<std::remove_const_t<Dm>, DarkMatterParticles>
+void for_each_field(Dm& d, Fn&& fn) {
+  fn("id", d.id);
+  fn("ti_begin", d.ti_begin);
+  fn("mass", d.mass);
+  fn("potential", d.potential);
+  fn("x", d.x);
+  fn("v_full", d.v_full);
+  fn("a_grav", d.a_grav);
+  fn("time_bin", d.time_bin);
 }
-template <class Gas>
-auto bin_fields(Gas& g) {
-  return std::vector<std::pair<const char*, decltype(&g.time_bin)>>{
-      {"time_bin", &g.time_bin}, {"courant_bin", &g.courant_bin}, {"limit_bin", &g.limit_bin}, {"wake_bin", &g.wake_bin}};
+
+constexpr const char* kGasGroup = "/Gas";
+constexpr const char* kDarkMatterGroup = "/DarkMatter";
+
+// ---- One field in the file (integer times as uint64, time bins as int32) -------------------
+
+void write_field(hdf5::File& f, const std::string& name, const std::vector<double>& v) { f.write_dataset(name, v); }
+void write_field(hdf5::File& f, const std::string& name, const std::vector<Vec3>& v) { f.write_dataset(name, v); }
+void write_field(hdf5::File& f, const std::string& name, const std::vector<std::uint64_t>& v) {
+  f.write_dataset(name, v);
+}
+void write_field(hdf5::File& f, const std::string& name, const std::vector<std::int64_t>& v) {
+  f.write_dataset(name, std::vector<std::uint64_t>(v.begin(), v.end()));
+}
+void write_field(hdf5::File& f, const std::string& name, const std::vector<TimeBin>& v) {
+  f.write_dataset(name, std::vector<std::int32_t>(v.begin(), v.end()));
+}
+
+void read_field(const hdf5::File& f, const std::string& name, std::vector<double>& v) { v = f.read_doubles(name); }
+void read_field(const hdf5::File& f, const std::string& name, std::vector<Vec3>& v) { v = f.read_vec3(name); }
+void read_field(const hdf5::File& f, const std::string& name, std::vector<std::uint64_t>& v) {
+  v = f.read_uint64(name);
+}
+void read_field(const hdf5::File& f, const std::string& name, std::vector<std::int64_t>& v) {
+  const std::vector<std::uint64_t> raw = f.read_uint64(name);
+  v.assign(raw.size(), 0);
+  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<std::int64_t>(raw[k]);
+}
+void read_field(const hdf5::File& f, const std::string& name, std::vector<TimeBin>& v) {
+  const std::vector<double> raw = f.read_doubles(name);
+  v.assign(raw.size(), 0);
+  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<TimeBin>(raw[k]);
+}
+
+// ---- A whole particle type ---------------------------------------------------------------
+
+template <class Particles>
+void add_to_checksum(Checksum& c, const Particles& p) {
+  for_each_field(p, [&](const char*, const auto& field) { c.add(field); });
+}
+
+template <class Particles>
+void write_particles(hdf5::File& f, const std::string& group, const Particles& p) {
+  f.create_group(group);
+  for_each_field(p, [&](const char* name, const auto& field) { write_field(f, group + "/" + name, field); });
+}
+
+// Reads every field of `group`; each must hold `count` entries (the count in /Restart).
+template <class Particles>
+Particles read_particles(const hdf5::File& f, const std::string& path, const std::string& group,
+                         std::uint64_t count, const char* noun) {
+  Particles p;
+  for_each_field(p, [&](const char* name, auto& field) {
+    const std::string dataset = group + "/" + name;
+    if (!f.exists(dataset)) throw InputError(fmt::format("{}: {} not found (restart file incomplete)", path, dataset));
+    read_field(f, dataset, field);
+    if (field.size() != count)
+      throw InputError(fmt::format("{}: {} has {} entries, but the file holds {} {} particles", path, dataset,
+                                   field.size(), count, noun));
+  });
+  return p;
 }
 
 std::string scalars_checksum_text(const RestartState& s) {
-  return fmt::format("{} {} {} {} {}", s.ti_current, s.steps, s.snapshots_written, s.next_output, s.gas.size());
+  return fmt::format("{} {} {} {} {} {}", s.ti_current, s.steps, s.snapshots_written, s.next_output, s.gas.size(),
+                     s.dm.size());
 }
 
 std::string checksum(const RestartState& s) {
@@ -62,11 +158,8 @@ std::string checksum(const RestartState& s) {
   const std::string scalars = scalars_checksum_text(s);
   c.add(scalars.data(), scalars.size());
   c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
-  c.add(s.gas.id);
-  c.add(s.gas.ti_begin);
-  for (auto& [name, f] : double_fields(s.gas)) c.add(*f);
-  for (auto& [name, f] : vector_fields(s.gas)) c.add(*f);
-  for (auto& [name, f] : bin_fields(s.gas)) c.add(*f);
+  add_to_checksum(c, s.gas);
+  add_to_checksum(c, s.dm);
   return c.hex();
 }
 
@@ -80,18 +173,12 @@ void write_restart(const std::string& path, const RestartState& s) {
     f.write_attribute("/Restart", "Steps", static_cast<std::int64_t>(s.steps));
     f.write_attribute("/Restart", "SnapshotsWritten", s.snapshots_written);
     f.write_attribute("/Restart", "NextOutput", s.next_output);
+    f.write_attribute("/Restart", "GasParticles", static_cast<std::int64_t>(s.gas.size()));
+    f.write_attribute("/Restart", "DarkMatterParticles", static_cast<std::int64_t>(s.dm.size()));
     f.write_string_dataset("/Restart/Parameters", s.parameters_yaml.empty() ? std::string("{}") : s.parameters_yaml);
     f.write_attribute("/Restart", "Checksum", checksum(s));
-    f.create_group("/Gas");
-    f.write_dataset("/Gas/id", s.gas.id);
-    std::vector<std::uint64_t> ti(s.gas.ti_begin.begin(), s.gas.ti_begin.end());
-    f.write_dataset("/Gas/ti_begin", ti);
-    for (auto& [name, field] : double_fields(s.gas)) f.write_dataset(std::string("/Gas/") + name, *field);
-    for (auto& [name, field] : vector_fields(s.gas)) f.write_dataset(std::string("/Gas/") + name, *field);
-    for (auto& [name, field] : bin_fields(s.gas)) {
-      std::vector<std::int32_t> b(field->begin(), field->end());
-      f.write_dataset(std::string("/Gas/") + name, b);
-    }
+    write_particles(f, kGasGroup, s.gas);
+    write_particles(f, kDarkMatterGroup, s.dm);
   });
 }
 
@@ -105,6 +192,10 @@ RestartState read_restart(const std::string& path) {
   if (version != kRestartFormatVersion)
     throw InputError(fmt::format("{}: restart format version {} cannot be read by this build (it reads version {})",
                                  path, version, kRestartFormatVersion));
+  for (const char* name : {"TiCurrent", "Steps", "SnapshotsWritten", "NextOutput", "GasParticles",
+                           "DarkMatterParticles", "Checksum"})
+    if (!f.has_attribute("/Restart", name))
+      throw InputError(fmt::format("{}: /Restart has no attribute {} (restart file incomplete)", path, name));
   RestartState s;
   s.ti_current = f.read_attribute_int64("/Restart", "TiCurrent").at(0);
   s.steps = f.read_attribute_int64("/Restart", "Steps").at(0);
@@ -112,29 +203,10 @@ RestartState read_restart(const std::string& path) {
   s.next_output = static_cast<int>(f.read_attribute_double("/Restart", "NextOutput"));
   s.parameters_yaml = f.read_string("/Restart/Parameters");
   if (s.parameters_yaml == "{}") s.parameters_yaml.clear();
-  const auto ids = f.read_uint64("/Gas/id");
-  s.gas.resize(ids.size());
-  s.gas.id = ids;
-  const auto ti = f.read_uint64("/Gas/ti_begin");
-  for (std::size_t k = 0; k < ti.size() && k < s.gas.size(); ++k) s.gas.ti_begin[k] = static_cast<std::int64_t>(ti[k]);
-  auto check_size = [&](const std::string& name, std::size_t n) {
-    if (n != s.gas.size())
-      throw InputError(fmt::format("{}: /Gas/{} has {} entries, expected {}", path, name, n, s.gas.size()));
-  };
-  check_size("ti_begin", ti.size());
-  for (auto& [name, field] : double_fields(s.gas)) {
-    *field = f.read_doubles(std::string("/Gas/") + name);
-    check_size(name, field->size());
-  }
-  for (auto& [name, field] : vector_fields(s.gas)) {
-    *field = f.read_vec3(std::string("/Gas/") + name);
-    check_size(name, field->size());
-  }
-  for (auto& [name, field] : bin_fields(s.gas)) {
-    const auto b = f.read_doubles(std::string("/Gas/") + name);
-    check_size(name, b.size());
-    for (std::size_t k = 0; k < b.size(); ++k) (*field)[k] = static_cast<TimeBin>(b[k]);
-  }
+  const std::uint64_t n_gas = f.read_attribute_uint64("/Restart", "GasParticles").at(0);
+  const std::uint64_t n_dm = f.read_attribute_uint64("/Restart", "DarkMatterParticles").at(0);
+  s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
+  s.dm = read_particles<DarkMatterParticles>(f, path, kDarkMatterGroup, n_dm, "dark matter");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");
   if (stored != checksum(s))
     throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));

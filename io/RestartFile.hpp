@@ -3,14 +3,17 @@
 #include <cstdint>
 #include <string>
 
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
 
-inline constexpr int kRestartFormatVersion = 2;
+// 3: dark matter (/DarkMatter), gas a_grav and potential, particle counts in /Restart.
+inline constexpr int kRestartFormatVersion = 3;
 
 struct RestartState {
   GasParticles gas;
+  DarkMatterParticles dm;  // empty in a run without dark matter
   std::int64_t ti_current = 0;
   long long steps = 0;
   int snapshots_written = 0;
@@ -18,12 +21,14 @@ struct RestartState {
   std::string parameters_yaml;  // the parameters the run was started with
 };
 
-// Writes atomically (temporary file, then rename). Every particle field is stored, plus a
-// format version and a checksum over all of it.
+// Writes atomically (temporary file, then rename). Every field of the gas (/Gas) and of the
+// dark matter (/DarkMatter) is stored, with the particle counts, a format version and a
+// checksum over all of it.
 void write_restart(const std::string& path, const RestartState& state);
 
-// Reads and verifies a restart file: a missing file, another format version or a checksum
-// that does not match (a corrupted file) throws InputError naming the file.
+// Reads and verifies a restart file: a missing file, another format version, a field whose
+// length disagrees with the stored particle count or a checksum that does not match (a
+// corrupted file) throws InputError naming the file.
 RestartState read_restart(const std::string& path);
 
 }  // namespace fountain::io

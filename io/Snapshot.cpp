@@ -10,7 +10,7 @@
 //    /Config, /HashTable, /RuntimePars, GFM_* fields, a 2-D Metallicity), so these files are
 //    recognised as plain GADGET HDF5 and nothing else.
 //  So the file is a valid GADGET HDF5 snapshot (/Header as GADGET-2 writes it, /PartType0
-//  datasets, MassTable zeros with per-particle Masses) with SWIFT's extras on top: /Units
+//  datasets and /PartType1 for dark matter, MassTable zeros with per-particle Masses) with SWIFT's extras on top: /Units
 //  (SWIFT attribute names), /Parameters (one "Section:key" string attribute per parameter),
 //  /Code, and SWIFT-style unit attributes on every dataset (as swiftsimio reads them:
 //  1-element float arrays).
@@ -185,24 +185,41 @@ void write_dataset_units(File& file, const std::string& dataset, const Units& un
 }
 
 template <class T>
-void check_size(const std::vector<T>& field, std::size_t n, const char* name) {
+void check_size(const std::vector<T>& field, std::size_t n, const char* species, const char* name) {
   if (field.size() != n)
-    throw InputError(fmt::format("gas field {} has {} entries, expected {}", name, field.size(), n));
+    throw InputError(fmt::format("{} field {} has {} entries, expected {}", species, name, field.size(), n));
 }
 
-}  // namespace
+// Unit dimensions (mass, length, time, a-scale exponent) of the datasets written below.
+constexpr Dimensions kPosition{0, 1, 0, 1};
+constexpr Dimensions kVelocity{0, 1, -1, 0};
+constexpr Dimensions kMass{1, 0, 0, 0};
+constexpr Dimensions kNone{0, 0, 0, 0};
+constexpr Dimensions kAcceleration{0, 1, -2, 0};
+constexpr Dimensions kPotential{0, 2, -2, -1};  // SWIFT: potentials scale as 1/a
 
-void write_snapshot(const std::string& path, const GasParticles& gas, const SnapshotInfo& info) {
+void write_snapshot_file(const std::string& path, const GasParticles& gas, const DarkMatterParticles* dm,
+                         const SnapshotInfo& info) {
   const std::size_t n = gas.size();
+  const std::size_t n_dm = dm != nullptr ? dm->size() : 0;
   try {
-    check_size(gas.mass, n, "mass");
-    check_size(gas.x, n, "x");
-    check_size(gas.v, n, "v");
-    check_size(gas.u, n, "u");
-    check_size(gas.h, n, "h");
-    check_size(gas.rho, n, "rho");
-    check_size(gas.wcount, n, "wcount");
-    check_size(gas.time_bin, n, "time_bin");
+    check_size(gas.mass, n, "gas", "mass");
+    check_size(gas.x, n, "gas", "x");
+    check_size(gas.v, n, "gas", "v");
+    check_size(gas.u, n, "gas", "u");
+    check_size(gas.h, n, "gas", "h");
+    check_size(gas.rho, n, "gas", "rho");
+    check_size(gas.wcount, n, "gas", "wcount");
+    check_size(gas.time_bin, n, "gas", "time_bin");
+    check_size(gas.a_grav, n, "gas", "a_grav");
+    check_size(gas.potential, n, "gas", "potential");
+    if (n_dm > 0) {
+      check_size(dm->mass, n_dm, "dark matter", "mass");
+      check_size(dm->x, n_dm, "dark matter", "x");
+      check_size(dm->v_full, n_dm, "dark matter", "v_full");
+      check_size(dm->a_grav, n_dm, "dark matter", "a_grav");
+      check_size(dm->potential, n_dm, "dark matter", "potential");
+    }
   } catch (const InputError& e) {
     throw InputError("cannot create snapshot " + path + ": " + e.what());
   }
@@ -214,7 +231,7 @@ void write_snapshot(const std::string& path, const GasParticles& gas, const Snap
 
     // /Header
     hdf5::write_gadget_header(file, n, cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z},
-                              info.time);
+                              info.time, n_dm);
     file.write_attribute("/Header", "Code", "Fountain");
     file.write_attribute("/Header", "Periodic", info.periodic ? 1 : 0);
     file.write_attribute("/Header", "Step", static_cast<std::int64_t>(info.step));
@@ -251,13 +268,13 @@ void write_snapshot(const std::string& path, const GasParticles& gas, const Snap
     auto ds = [](const char* name) { return std::string("/PartType0/") + name; };
 
     file.write_dataset(ds("Coordinates"), gas.x);
-    write_dataset_units(file, ds("Coordinates"), units, {0, 1, 0, 1}, "Positions of the particles");
+    write_dataset_units(file, ds("Coordinates"), units, kPosition, "Positions of the particles");
     file.write_dataset(ds("Velocities"), gas.v);
-    write_dataset_units(file, ds("Velocities"), units, {0, 1, -1, 0}, "Velocities of the particles (predicted)");
+    write_dataset_units(file, ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
     file.write_dataset(ds("Masses"), gas.mass);
-    write_dataset_units(file, ds("Masses"), units, {1, 0, 0, 0}, "Masses of the particles");
+    write_dataset_units(file, ds("Masses"), units, kMass, "Masses of the particles");
     file.write_dataset(ds("ParticleIDs"), gas.id);
-    write_dataset_units(file, ds("ParticleIDs"), units, {0, 0, 0, 0}, "Unique IDs of the particles");
+    write_dataset_units(file, ds("ParticleIDs"), units, kNone, "Unique IDs of the particles");
     file.write_dataset(ds("InternalEnergy"), gas.u);
     write_dataset_units(file, ds("InternalEnergy"), units, {0, 2, -2, a_u},
                         "Specific internal energies of the particles (predicted)");
@@ -278,7 +295,47 @@ void write_snapshot(const std::string& path, const GasParticles& gas, const Snap
     file.write_dataset(ds("TimeBin"), bins);
     write_dataset_units(file, ds("TimeBin"), units, {0, 0, 0, 0},
                         "Time bins of the particles (step = 2^bin integer time units)");
+    file.write_dataset(ds("Potential"), gas.potential);
+    write_dataset_units(file, ds("Potential"), units, kPotential,
+                        "Specific gravitational potentials of the particles at the last force computation "
+                        "(0 without gravity)");
+    file.write_dataset(ds("GravAcceleration"), gas.a_grav);
+    write_dataset_units(file, ds("GravAcceleration"), units, kAcceleration,
+                        "Gravitational accelerations of the particles at the last force computation "
+                        "(0 without gravity)");
+    if (n_dm == 0) return;
+
+    // /PartType1 (dark matter): MassTable[1] stays 0, the masses are per particle.
+    file.create_group("/PartType1");
+    auto dm_ds = [](const char* name) { return std::string("/PartType1/") + name; };
+    file.write_dataset(dm_ds("Coordinates"), dm->x);
+    write_dataset_units(file, dm_ds("Coordinates"), units, kPosition, "Positions of the particles");
+    file.write_dataset(dm_ds("Velocities"), dm->v_full);
+    write_dataset_units(file, dm_ds("Velocities"), units, kVelocity,
+                        "Velocities of the particles (the integrated velocity: half-kicked for particles "
+                        "in the middle of a step)");
+    file.write_dataset(dm_ds("Masses"), dm->mass);
+    write_dataset_units(file, dm_ds("Masses"), units, kMass, "Masses of the particles");
+    file.write_dataset(dm_ds("ParticleIDs"), dm->id);
+    write_dataset_units(file, dm_ds("ParticleIDs"), units, kNone, "Unique IDs of the particles");
+    file.write_dataset(dm_ds("Potential"), dm->potential);
+    write_dataset_units(file, dm_ds("Potential"), units, kPotential,
+                        "Specific gravitational potentials of the particles at the last force computation");
+    file.write_dataset(dm_ds("Acceleration"), dm->a_grav);
+    write_dataset_units(file, dm_ds("Acceleration"), units, kAcceleration,
+                        "Gravitational accelerations of the particles at the last force computation");
   });
+}
+
+}  // namespace
+
+void write_snapshot(const std::string& path, const GasParticles& gas, const SnapshotInfo& info) {
+  write_snapshot_file(path, gas, nullptr, info);
+}
+
+void write_snapshot(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
+                    const SnapshotInfo& info) {
+  write_snapshot_file(path, gas, &dm, info);
 }
 
 }  // namespace fountain::io

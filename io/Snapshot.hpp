@@ -4,6 +4,7 @@
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
+#include "particles/DarkMatterParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
@@ -24,5 +25,11 @@ struct SnapshotInfo {
 // leaves a half-written snapshot under the final name). Throws InputError naming the path
 // when the folder is not writable or a write fails.
 void write_snapshot(const std::string& path, const GasParticles& gas, const SnapshotInfo& info);
+
+// The same with dark matter: when `dm` is not empty it is written as /PartType1
+// (Coordinates, Velocities = v_full, Masses, ParticleIDs, Potential, Acceleration) and
+// counted in /Header (MassTable[1] = 0: the masses are per particle).
+void write_snapshot(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
+                    const SnapshotInfo& info);
 
 }  // namespace fountain::io

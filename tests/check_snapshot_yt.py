@@ -1,13 +1,13 @@
 #!/usr/bin/python3
-"""Check that yt opens a Fountain snapshot and sees the same gas mass as h5py.
+"""Check that yt opens a Fountain snapshot and sees the same gas (and dark matter) mass as h5py.
 
 Usage: check_snapshot_yt.py SNAPSHOT.hdf5
 
 yt recognises Fountain snapshots with its GADGET HDF5 frontend (GadgetHDF5Dataset; see the
 comment at the top of io/Snapshot.cpp for why not the SWIFT one). That frontend ignores
 /Units, so the units are passed as unit_base from the GADGET-named attributes in /Units.
-Prints OK and exits 0 when the total gas mass agrees to 1e-10 (relative), else prints the
-difference and exits 1.
+Prints OK and exits 0 when the total gas mass -- and, for a snapshot with /PartType1, the
+total dark matter mass -- agree to 1e-10 (relative), else prints the difference and exits 1.
 """
 import logging
 import os
@@ -33,6 +33,9 @@ def main(argv):
     try:
         with h5py.File(path, "r") as f:
             masses = np.asarray(f["/PartType0/Masses"][...], dtype=np.float64)
+            dm_masses = (
+                np.asarray(f["/PartType1/Masses"][...], dtype=np.float64) if "PartType1" in f else None
+            )
             units = dict(f["/Units"].attrs)
             box = np.ravel(f["/Header"].attrs["BoxSize"]).astype(np.float64)
         length_cgs = float(np.ravel(units["Unit length in cgs (U_L)"])[0])
@@ -67,17 +70,37 @@ def main(argv):
             total = ad["PartType0", "Masses"].sum()
         got_g = float(total.in_cgs())
         frontend = type(ds).__name__
+        dm_got_g = None
+        if dm_masses is not None:
+            try:
+                dm_got_g = float(ad["PartType1", "Masses"].sum().in_cgs())
+            except Exception as e:  # noqa: BLE001 -- yt does not see the dark matter
+                print(f"FAIL ({frontend}): yt cannot read /PartType1/Masses: {type(e).__name__}: {e}")
+                return 1
 
-    rel = abs(got_g - expected_g) / abs(expected_g) if expected_g != 0 else abs(got_g)
-    if rel <= 1e-10:
-        print(f"OK ({frontend}: {masses.size} gas particles, total mass {got_g:.12e} g)")
-        return 0
-    print(
-        f"FAIL ({frontend}): yt total gas mass {got_g:.17e} g, h5py {expected_g:.17e} g, "
-        f"relative difference {rel:.3e}"
-    )
-    return 1
+    def relative(got, expected):
+        return abs(got - expected) / abs(expected) if expected != 0 else abs(got)
 
+    rel = relative(got_g, expected_g)
+    if rel > 1e-10:
+        print(
+            f"FAIL ({frontend}): yt total gas mass {got_g:.17e} g, h5py {expected_g:.17e} g, "
+            f"relative difference {rel:.3e}"
+        )
+        return 1
+    dm_text = ""
+    if dm_masses is not None:
+        dm_expected_g = float(np.sum(dm_masses)) * mass_cgs
+        dm_rel = relative(dm_got_g, dm_expected_g)
+        if dm_rel > 1e-10:
+            print(
+                f"FAIL ({frontend}): yt total dark matter mass {dm_got_g:.17e} g, h5py {dm_expected_g:.17e} g, "
+                f"relative difference {dm_rel:.3e}"
+            )
+            return 1
+        dm_text = f"; {dm_masses.size} dark matter particles, total mass {dm_got_g:.12e} g"
+    print(f"OK ({frontend}: {masses.size} gas particles, total mass {got_g:.12e} g{dm_text})")
+    return 0
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv))

@@ -1,4 +1,5 @@
 // Tests of the HDF5 initial-conditions reader/writer and of the snapshot writer.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <hdf5.h>
 #include <unistd.h>
@@ -6,18 +7,25 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "app/Simulation.hpp"
 #include "core/Error.hpp"
+#include "engine/RunConfig.hpp"
 #include "io/Hdf5File.hpp"
 #include "io/InitialConditions.hpp"
+#include "io/RestartFile.hpp"
 #include "io/Snapshot.hpp"
+#include "params/ParameterFile.hpp"
 
 namespace fs = std::filesystem;
+using fountain::DarkMatterParticles;
 using fountain::GasParticles;
 using fountain::InputError;
 using fountain::Vec3;
@@ -64,6 +72,19 @@ GasParticles make_gas(std::size_t n, std::uint64_t first_id = 1) {
   return gas;
 }
 
+DarkMatterParticles make_dm(std::size_t n, std::uint64_t first_id = 100000) {
+  DarkMatterParticles dm;
+  dm.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double s = static_cast<double>(i);
+    dm.id[i] = first_id + 3 * i;
+    dm.mass[i] = 7.0 + 0.125 * s;
+    dm.x[i] = {std::fmod(0.53 * s, 2.0), 1.0 + 0.8 * std::cos(s), 0.5 + 1.0 / (s + 2.0)};
+    dm.v_full[i] = {0.25 * s, -s, 3e-6 * s};
+  }
+  return dm;
+}
+
 // A GADGET-layout file written field by field, so tests can leave things out or break them.
 struct HandWritten {
   std::vector<std::uint64_t> ids;
@@ -73,9 +94,16 @@ struct HandWritten {
   bool write_energy = true;
   std::vector<double> mass_table = std::vector<double>(6, 0.0);
   long long header_count = -1;  // -1: the number of IDs
+  // Dark matter (/PartType1), written when dm_ids is not empty or dm_header_count > 0.
+  std::vector<std::uint64_t> dm_ids;
+  std::vector<Vec3> dm_x, dm_v;
+  std::vector<double> dm_mass;
+  bool write_dm_masses = true;
+  bool write_dm_group = true;
+  long long dm_header_count = -1;  // -1: the number of dark matter IDs
 };
 
-HandWritten hand_written(std::size_t n) {
+HandWritten hand_written(std::size_t n, std::size_t n_dm = 0) {
   const GasParticles gas = make_gas(n);
   HandWritten h;
   h.ids = gas.id;
@@ -83,6 +111,11 @@ HandWritten hand_written(std::size_t n) {
   h.v = gas.v_full;
   h.mass = gas.mass;
   h.u = gas.u_full;
+  const DarkMatterParticles dm = make_dm(n_dm);
+  h.dm_ids = dm.id;
+  h.dm_x = dm.x;
+  h.dm_v = dm.v_full;
+  h.dm_mass = dm.mass;
   return h;
 }
 
@@ -90,9 +123,12 @@ void write_by_hand(const std::string& path, const HandWritten& h) {
   File f(path, File::Mode::create);
   f.create_group("/Header");
   const auto n = static_cast<std::int32_t>(h.header_count >= 0 ? h.header_count : static_cast<long long>(h.ids.size()));
+  const auto n_dm = static_cast<std::int32_t>(h.dm_header_count >= 0 ? h.dm_header_count
+                                                                      : static_cast<long long>(h.dm_ids.size()));
   // int32 counts and a 64-bit total, as different IC generators write them.
-  f.write_attribute("/Header", "NumPart_ThisFile", std::vector<std::int32_t>{n, 0, 0, 0, 0, 0});
-  f.write_attribute("/Header", "NumPart_Total", std::vector<std::uint64_t>{static_cast<std::uint64_t>(n), 0, 0, 0, 0, 0});
+  f.write_attribute("/Header", "NumPart_ThisFile", std::vector<std::int32_t>{n, n_dm, 0, 0, 0, 0});
+  f.write_attribute("/Header", "NumPart_Total", std::vector<std::uint64_t>{static_cast<std::uint64_t>(n),
+                                                                           static_cast<std::uint64_t>(n_dm), 0, 0, 0, 0});
   f.write_attribute("/Header", "MassTable", h.mass_table);
   f.write_attribute("/Header", "BoxSize", 4.0);  // scalar: a cube; no Time attribute
   f.create_group("/PartType0");
@@ -101,6 +137,13 @@ void write_by_hand(const std::string& path, const HandWritten& h) {
   f.write_dataset("/PartType0/Velocities", h.v);
   if (h.write_masses) f.write_dataset("/PartType0/Masses", h.mass);
   if (h.write_energy) f.write_dataset("/PartType0/InternalEnergy", h.u);
+  if ((!h.dm_ids.empty() || n_dm > 0) && h.write_dm_group) {
+    f.create_group("/PartType1");
+    f.write_dataset("/PartType1/ParticleIDs", h.dm_ids);
+    f.write_dataset("/PartType1/Coordinates", h.dm_x);
+    f.write_dataset("/PartType1/Velocities", h.dm_v);
+    if (h.write_dm_masses) f.write_dataset("/PartType1/Masses", h.dm_mass);
+  }
   f.close();
 }
 
@@ -367,6 +410,133 @@ TEST_F(IoTest, ReadsFloat32DataAndUint32Ids) {
   EXPECT_TRUE(ic.has_smoothing_length);
 }
 
+// ---- Initial conditions with dark matter (/PartType1) ----------------------------------------
+
+TEST_F(IoTest, InitialConditionsRoundTripWithDarkMatter) {
+  const GasParticles gas = make_gas(23, 1);
+  DarkMatterParticles dm = make_dm(31, 500);
+  const std::string path = file("ics_dm.hdf5");
+  fountain::io::write_initial_conditions(path, gas, dm, {2.0, 2.0, 2.0}, true, 0.5);
+
+  const auto ic = fountain::io::read_initial_conditions(path);
+  EXPECT_EQ(ic.gas.id, gas.id);
+  EXPECT_EQ(ic.gas.x, gas.x);
+  ASSERT_EQ(ic.dm.size(), dm.size());
+  EXPECT_EQ(ic.dm.id, dm.id);
+  EXPECT_EQ(ic.dm.mass, dm.mass);
+  EXPECT_EQ(ic.dm.x, dm.x);
+  EXPECT_EQ(ic.dm.v_full, dm.v_full);
+  EXPECT_EQ(ic.dm.a_grav, std::vector<Vec3>(dm.size()));
+  EXPECT_EQ(ic.dm.potential, std::vector<double>(dm.size(), 0.0));
+  EXPECT_EQ(ic.dm.time_bin, std::vector<fountain::TimeBin>(dm.size(), 0));
+  EXPECT_EQ(ic.dm.ti_begin, std::vector<std::int64_t>(dm.size(), 0));
+
+  // All dark matter particles of one mass: the writer puts it in MassTable[1], the reader
+  // takes the Masses dataset (or the table when the dataset is absent, below).
+  for (double& m : dm.mass) m = 3.0;
+  fountain::io::write_initial_conditions(path, gas, dm, {2.0, 2.0, 2.0}, true, 0.5);
+  const auto same = fountain::io::read_initial_conditions(path);
+  EXPECT_EQ(same.dm.mass, dm.mass);
+}
+
+TEST_F(IoTest, FileWithoutDarkMatterGivesNone) {
+  const std::string path = file("ics.hdf5");
+  fountain::io::write_initial_conditions(path, make_gas(5), {1, 1, 1}, false);
+  EXPECT_EQ(fountain::io::read_initial_conditions(path).dm.size(), 0u);
+  // An empty /PartType1 group announced as zero particles is no dark matter either.
+  fountain::io::write_initial_conditions(path, make_gas(5), DarkMatterParticles{}, {1, 1, 1}, false);
+  EXPECT_EQ(fountain::io::read_initial_conditions(path).dm.size(), 0u);
+}
+
+TEST_F(IoTest, DarkMatterMassTableIsUsedWhenMassesAreAbsent) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10, 6);
+  h.write_dm_masses = false;
+  h.mass_table = {0, 0.75, 0, 0, 0, 0};
+  write_by_hand(path, h);
+  const auto ic = fountain::io::read_initial_conditions(path);
+  ASSERT_EQ(ic.dm.size(), 6u);
+  EXPECT_EQ(ic.dm.mass, std::vector<double>(6, 0.75));
+  EXPECT_EQ(ic.dm.id, h.dm_ids);
+  EXPECT_EQ(ic.gas.mass, h.mass);
+}
+
+TEST_F(IoTest, DarkMatterMissingMassesWithZeroMassTableIsAnError) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10, 6);
+  h.write_dm_masses = false;
+  h.mass_table = {0.5, 0, 0, 0, 0, 0};  // gas masses in the table, none for the dark matter
+  write_by_hand(path, h);
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, path + ": /PartType1/Masses: dataset not found and /Header/MassTable[1] is 0")) << msg;
+  EXPECT_TRUE(contains(msg, "dark matter masses are missing")) << msg;
+}
+
+TEST_F(IoTest, DarkMatterNanCoordinateNamesTheParticle) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10, 6);
+  h.dm_x[4].z = std::numeric_limits<double>::quiet_NaN();
+  write_by_hand(path, h);
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, path + ": /PartType1/Coordinates: particle ID " + std::to_string(h.dm_ids[4]) +
+                                " has non-finite coordinates"))
+      << msg;
+}
+
+TEST_F(IoTest, DarkMatterNegativeMassNamesTheParticle) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10, 6);
+  h.dm_mass[2] = -4.0;
+  write_by_hand(path, h);
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, path + ": /PartType1/Masses: particle ID " + std::to_string(h.dm_ids[2]) +
+                                " has mass -4 (must be positive)"))
+      << msg;
+}
+
+TEST_F(IoTest, IdSharedByGasAndDarkMatterIsAnError) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10, 6);
+  h.dm_ids[3] = h.ids[8];
+  write_by_hand(path, h);
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, path + ": /PartType1/ParticleIDs: particle ID " + std::to_string(h.ids[8]))) << msg;
+  EXPECT_TRUE(contains(msg, "unique across gas and dark matter")) << msg;
+
+  // Twice within the dark matter.
+  h = hand_written(10, 6);
+  h.dm_ids[5] = h.dm_ids[1];
+  write_by_hand(path, h);
+  const std::string twice = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(twice, "/PartType1/ParticleIDs: particle ID " + std::to_string(h.dm_ids[1]))) << twice;
+}
+
+TEST_F(IoTest, DarkMatterCountDisagreeingWithHeaderIsAnError) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(10, 6);
+  h.dm_header_count = 7;
+  write_by_hand(path, h);
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, path + ": /PartType1/ParticleIDs: has 6 entries but /Header/NumPart_ThisFile[1] "
+                                   "announces 7 dark matter particles"))
+      << msg;
+
+  h = hand_written(10, 6);
+  h.write_dm_group = false;
+  write_by_hand(path, h);
+  const std::string missing = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(missing, path + ": /PartType1: group not found")) << missing;
+}
+
+TEST_F(IoTest, DarkMatterWithoutGasIsAnError) {
+  const std::string path = file("ics.hdf5");
+  write_by_hand(path, hand_written(0, 8));
+  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  EXPECT_TRUE(contains(msg, path + ": /Header/NumPart_ThisFile")) << msg;
+  EXPECT_TRUE(contains(msg, "no gas particles")) << msg;
+  EXPECT_TRUE(contains(msg, "8 dark matter particles")) << msg;
+}
+
 // ---- Snapshots ------------------------------------------------------------------------------
 
 TEST_F(IoTest, SnapshotIntoMissingFolderIsAnError) {
@@ -444,8 +614,211 @@ TEST_F(IoTest, SnapshotOverwritesAnOldOne) {
   EXPECT_EQ(f.read_doubles("/PartType0/Masses").size(), 7u);
 }
 
+TEST_F(IoTest, SnapshotWithDarkMatter) {
+  GasParticles gas = make_gas(20, 5);
+  DarkMatterParticles dm = make_dm(30, 1000);
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    gas.a_grav[i] = {0.5 * static_cast<double>(i), -1.0, 2.0};
+    gas.potential[i] = -3.0 - static_cast<double>(i);
+  }
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    dm.a_grav[i] = {-0.25 * static_cast<double>(i), 1.5, 0.0};
+    dm.potential[i] = -10.0 + 0.5 * static_cast<double>(i);
+  }
+  const auto info = snapshot_info();
+  const std::string path = file("snap_dm.hdf5");
+  fountain::io::write_snapshot(path, gas, dm, info);
+
+  File f(path, File::Mode::read);
+  EXPECT_EQ(f.read_attribute_uint64("/Header", "NumPart_ThisFile"), (std::vector<std::uint64_t>{20, 30, 0, 0, 0, 0}));
+  EXPECT_EQ(f.read_attribute_uint64("/Header", "NumPart_Total"), (std::vector<std::uint64_t>{20, 30, 0, 0, 0, 0}));
+  EXPECT_EQ(f.read_attribute_uint64("/Header", "NumPart_Total_HighWord"), std::vector<std::uint64_t>(6, 0));
+  EXPECT_EQ(f.read_attribute_doubles("/Header", "MassTable"), std::vector<double>(6, 0.0));
+  EXPECT_EQ(f.read_vec3("/PartType1/Coordinates"), dm.x);
+  EXPECT_EQ(f.read_vec3("/PartType1/Velocities"), dm.v_full);
+  EXPECT_EQ(f.read_doubles("/PartType1/Masses"), dm.mass);
+  EXPECT_EQ(f.read_uint64("/PartType1/ParticleIDs"), dm.id);
+  EXPECT_EQ(f.read_doubles("/PartType1/Potential"), dm.potential);
+  EXPECT_EQ(f.read_vec3("/PartType1/Acceleration"), dm.a_grav);
+  EXPECT_EQ(f.read_doubles("/PartType0/Potential"), gas.potential);
+  EXPECT_EQ(f.read_vec3("/PartType0/GravAcceleration"), gas.a_grav);
+
+  // Unit attributes as on the gas datasets.
+  EXPECT_EQ(f.read_attribute_doubles("/PartType1/Velocities", "U_t exponent"), std::vector<double>{-1.0});
+  EXPECT_EQ(f.read_attribute_doubles("/PartType1/Acceleration", "U_L exponent"), std::vector<double>{1.0});
+  EXPECT_EQ(f.read_attribute_doubles("/PartType1/Acceleration", "U_t exponent"), std::vector<double>{-2.0});
+  EXPECT_EQ(f.read_attribute_doubles("/PartType1/Potential", "U_L exponent"), std::vector<double>{2.0});
+  EXPECT_EQ(f.read_attribute_doubles("/PartType0/GravAcceleration", "U_t exponent"), std::vector<double>{-2.0});
+  EXPECT_DOUBLE_EQ(
+      f.read_attribute_double("/PartType1/Masses", "Conversion factor to CGS (not including cosmological corrections)"),
+      info.units.mass_cgs);
+  for (const char* name : {"Coordinates", "Velocities", "Masses", "ParticleIDs", "Potential", "Acceleration"})
+    EXPECT_FALSE(f.read_attribute_string(std::string("/PartType1/") + name, "Description").empty()) << name;
+
+  // Read back as initial conditions, dark matter included.
+  const auto ic = fountain::io::read_initial_conditions(path);
+  EXPECT_EQ(ic.dm.id, dm.id);
+  EXPECT_EQ(ic.dm.x, dm.x);
+  EXPECT_EQ(ic.dm.mass, dm.mass);
+
+  // Without dark matter: no /PartType1, gravity datasets still there (zeros without gravity).
+  const std::string gas_only = file("snap_gas.hdf5");
+  fountain::io::write_snapshot(gas_only, make_gas(4), DarkMatterParticles{}, info);
+  File g(gas_only, File::Mode::read);
+  EXPECT_FALSE(g.exists("/PartType1"));
+  EXPECT_EQ(g.read_attribute_uint64("/Header", "NumPart_ThisFile"), (std::vector<std::uint64_t>{4, 0, 0, 0, 0, 0}));
+  EXPECT_EQ(g.read_doubles("/PartType0/Potential"), std::vector<double>(4, 0.0));
+}
+
+// ---- Restart files --------------------------------------------------------------------------
+
+namespace {
+
+// Bitwise equality of two fields (== would call -0.0 and 0.0 equal).
+template <class T>
+bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+// A state whose every field holds distinct values that are not round in binary.
+fountain::io::RestartState restart_state(std::size_t n_gas, std::size_t n_dm) {
+  fountain::io::RestartState s;
+  s.gas = make_gas(n_gas, 1);
+  s.dm = make_dm(n_dm, 10000);
+  double k = 0.1;
+  auto fill = [&](auto& field) {
+    for (auto& v : field) {
+      k = k * 1.0000001 + 0.7071067811865476;
+      using T = std::remove_reference_t<decltype(v)>;
+      if constexpr (std::is_same_v<T, Vec3>) {
+        v = {k, -k / 3.0, k * 1e-9};
+      } else if constexpr (std::is_same_v<T, double>) {
+        v = -k / 7.0;
+      }
+    }
+  };
+  for (auto* f : {&s.gas.mass, &s.gas.u_full, &s.gas.u, &s.gas.h, &s.gas.rho, &s.gas.rho_msph, &s.gas.h_msph,
+                  &s.gas.wcount, &s.gas.wcount_dh, &s.gas.div_v, &s.gas.soundspeed, &s.gas.p_over_rho_a,
+                  &s.gas.inv_rho_2ma, &s.gas.balsara, &s.gas.du_dt, &s.gas.potential, &s.dm.mass, &s.dm.potential})
+    fill(*f);
+  for (auto* f : {&s.gas.x, &s.gas.v_full, &s.gas.v, &s.gas.curl_v, &s.gas.a_hydro, &s.gas.a_grav, &s.dm.x,
+                  &s.dm.v_full, &s.dm.a_grav})
+    fill(*f);
+  s.gas.potential[0] = -0.0;  // the sign of zero must survive too
+  for (std::size_t i = 0; i < n_gas; ++i) {
+    s.gas.ti_begin[i] = static_cast<std::int64_t>(i) << 40;
+    s.gas.time_bin[i] = static_cast<fountain::TimeBin>(20 + i % 7);
+    s.gas.courant_bin[i] = static_cast<fountain::TimeBin>(30 - i % 5);
+    s.gas.limit_bin[i] = i % 3 == 0 ? fountain::kNoBin : static_cast<fountain::TimeBin>(22);
+    s.gas.wake_bin[i] = i % 4 == 0 ? static_cast<fountain::TimeBin>(19) : fountain::kNoBin;
+  }
+  for (std::size_t i = 0; i < n_dm; ++i) {
+    s.dm.ti_begin[i] = (static_cast<std::int64_t>(i) << 38) + 5;
+    s.dm.time_bin[i] = static_cast<fountain::TimeBin>(18 + i % 9);
+  }
+  s.ti_current = std::int64_t{1} << 50;
+  s.steps = 1234;
+  s.snapshots_written = 3;
+  s.next_output = 4;
+  s.parameters_yaml = "run:\n  t_end: 1\n";
+  return s;
+}
+
+}  // namespace
+
+TEST_F(IoTest, RestartRoundTripWithDarkMatterIsBitwise) {
+  const auto s = restart_state(17, 29);
+  const std::string path = file("restart.hdf5");
+  fountain::io::write_restart(path, s);
+  EXPECT_EQ(fountain::io::kRestartFormatVersion, 3);
+  const auto r = fountain::io::read_restart(path);
+
+  EXPECT_EQ(r.ti_current, s.ti_current);
+  EXPECT_EQ(r.steps, s.steps);
+  EXPECT_EQ(r.snapshots_written, s.snapshots_written);
+  EXPECT_EQ(r.next_output, s.next_output);
+  EXPECT_EQ(r.parameters_yaml, s.parameters_yaml);
+
+  const auto &g = r.gas, &h = s.gas;
+  EXPECT_TRUE(same_bits(g.id, h.id));
+  EXPECT_TRUE(same_bits(g.ti_begin, h.ti_begin));
+#define FOUNTAIN_SAME(field) EXPECT_TRUE(same_bits(g.field, h.field)) << #field
+  FOUNTAIN_SAME(mass); FOUNTAIN_SAME(x); FOUNTAIN_SAME(v_full); FOUNTAIN_SAME(u_full); FOUNTAIN_SAME(v);
+  FOUNTAIN_SAME(u); FOUNTAIN_SAME(h); FOUNTAIN_SAME(rho); FOUNTAIN_SAME(rho_msph); FOUNTAIN_SAME(h_msph);
+  FOUNTAIN_SAME(wcount); FOUNTAIN_SAME(wcount_dh); FOUNTAIN_SAME(div_v); FOUNTAIN_SAME(curl_v);
+  FOUNTAIN_SAME(soundspeed); FOUNTAIN_SAME(p_over_rho_a); FOUNTAIN_SAME(inv_rho_2ma); FOUNTAIN_SAME(balsara);
+  FOUNTAIN_SAME(a_hydro); FOUNTAIN_SAME(du_dt); FOUNTAIN_SAME(a_grav); FOUNTAIN_SAME(potential);
+  FOUNTAIN_SAME(time_bin); FOUNTAIN_SAME(courant_bin); FOUNTAIN_SAME(limit_bin); FOUNTAIN_SAME(wake_bin);
+#undef FOUNTAIN_SAME
+
+  const auto &d = r.dm, &e = s.dm;
+  ASSERT_EQ(d.size(), e.size());
+#define FOUNTAIN_SAME(field) EXPECT_TRUE(same_bits(d.field, e.field)) << "dm." #field
+  FOUNTAIN_SAME(id); FOUNTAIN_SAME(mass); FOUNTAIN_SAME(x); FOUNTAIN_SAME(v_full); FOUNTAIN_SAME(a_grav);
+  FOUNTAIN_SAME(potential); FOUNTAIN_SAME(time_bin); FOUNTAIN_SAME(ti_begin);
+#undef FOUNTAIN_SAME
+
+  // The dark matter is part of the checksum.
+  {
+    hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    hid_t ds = H5Dopen2(f, "/DarkMatter/potential", H5P_DEFAULT);
+    std::vector<double> p = s.dm.potential;
+    p[11] += 1e-12;
+    ASSERT_GE(ds, 0);
+    EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), 0);
+    H5Dclose(ds);
+    EXPECT_GE(H5Fclose(f), 0);
+  }
+  const std::string msg = error_of([&] { fountain::io::read_restart(path); });
+  EXPECT_TRUE(contains(msg, path + ": restart file is corrupted")) << msg;
+
+  // A run without dark matter round-trips too.
+  fountain::io::write_restart(path, restart_state(5, 0));
+  EXPECT_EQ(fountain::io::read_restart(path).dm.size(), 0u);
+}
+
+TEST_F(IoTest, RestartWithWrongDarkMatterCountIsRefused) {
+  // A file whose dark matter fields disagree with its particle count.
+  const std::string path = file("restart.hdf5");
+  fountain::io::write_restart(path, restart_state(4, 9));
+  {
+    hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    hid_t g = H5Gopen2(f, "/Restart", H5P_DEFAULT);
+    hid_t a = H5Aopen(g, "DarkMatterParticles", H5P_DEFAULT);
+    ASSERT_GE(a, 0);
+    const std::int64_t wrong = 10;
+    EXPECT_GE(H5Awrite(a, H5T_NATIVE_INT64, &wrong), 0);
+    H5Aclose(a);
+    H5Gclose(g);
+    EXPECT_GE(H5Fclose(f), 0);
+  }
+  const std::string msg = error_of([&] { fountain::io::read_restart(path); });
+  EXPECT_TRUE(contains(msg, path + ": /DarkMatter/id has 9 entries, but the file holds 10 dark matter particles"))
+      << msg;
+
+  // A restart file whose dark matter count differs from the initial conditions' is refused
+  // before the run starts.
+  const std::string ics = file("ics.hdf5");
+  fountain::io::write_initial_conditions(ics, make_gas(8), make_dm(6), {2, 2, 2}, false);
+  const std::string out = file("out");
+  const auto params = fountain::ParameterFile::parse(
+      fmt::format("run:\n  t_end: 0.01\ninitial_conditions:\n  file: {}\noutput:\n  directory: {}\n", ics, out),
+      file("params.yml"));
+  fs::create_directories(out);
+  auto state = restart_state(8, 5);
+  state.parameters_yaml = fountain::RunConfig::from(params).parameters_yaml;
+  fountain::io::write_restart(fountain::restart_path(params), state);
+  const std::string run = error_of([&] { fountain::run_simulation(params, true, 1, true); });
+  EXPECT_TRUE(contains(run, fountain::restart_path(params) + ": restart file holds 5 dark matter particles, but the "
+                                                             "initial conditions " + ics + " have 6"))
+      << run;
+}
+
 // Writes a snapshot where FOUNTAIN_IO_SNAPSHOT says (and a non-cubic one where
-// FOUNTAIN_IO_SNAPSHOT_NONCUBIC says), for tests/check_snapshot_yt.py.
+// FOUNTAIN_IO_SNAPSHOT_NONCUBIC says, one with dark matter where FOUNTAIN_IO_SNAPSHOT_DM
+// says), for tests/check_snapshot_yt.py.
 TEST(IoExternal, WriteSnapshotForExternalCheck) {
   const char* out = std::getenv("FOUNTAIN_IO_SNAPSHOT");
   if (out == nullptr || *out == '\0') GTEST_SKIP() << "FOUNTAIN_IO_SNAPSHOT not set";
@@ -455,6 +828,10 @@ TEST(IoExternal, WriteSnapshotForExternalCheck) {
   if (const char* odd = std::getenv("FOUNTAIN_IO_SNAPSHOT_NONCUBIC"); odd != nullptr && *odd != '\0') {
     info.box_size = {2.0, 3.0, 4.0};
     fountain::io::write_snapshot(odd, make_gas(500, 1), info);
+  }
+  if (const char* dm = std::getenv("FOUNTAIN_IO_SNAPSHOT_DM"); dm != nullptr && *dm != '\0') {
+    info.box_size = {2.0, 2.0, 2.0};
+    fountain::io::write_snapshot(dm, make_gas(400, 1), make_dm(700, 5000), info);
   }
   EXPECT_TRUE(fs::exists(out));
 }

@@ -346,8 +346,12 @@ TEST_F(SphereIcsFile, WriteReadRoundTripWithDarkMatter) {
   const double side = 2.0 * p.radius;
   fountain::io::write_initial_conditions(path, ic.gas, ic.dm, {side, side, side}, false);
 
-  // The project's reader takes the gas and leaves /PartType1 alone.
+  // The project's reader takes both species back.
   const fountain::io::InitialConditions back = fountain::io::read_initial_conditions(path);
+  EXPECT_EQ(back.dm.id, ic.dm.id);
+  EXPECT_EQ(back.dm.x, ic.dm.x);
+  EXPECT_EQ(back.dm.v_full, ic.dm.v_full);
+  EXPECT_EQ(back.dm.mass, ic.dm.mass);
   ASSERT_EQ(back.gas.size(), ic.gas.size());
   EXPECT_EQ(back.gas.id, ic.gas.id);
   EXPECT_EQ(back.gas.x, ic.gas.x);

@@ -86,7 +86,12 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   if (restart) {
     state = io::read_restart(restart_path(params));
     check_same_parameters(state, params, restart_path(params));
+    if (state.dm.size() != ic.dm.size())
+      throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "
+                                   "have {}",
+                                   restart_path(params), state.dm.size(), resolve_ic_path(params), ic.dm.size()));
     ic.gas = std::move(state.gas);
+    ic.dm = std::move(state.dm);
   }
   config.space.box_size = ic.box_size;
   if (config.space.periodic && !(ic.box_size.x > 0 && ic.box_size.y > 0 && ic.box_size.z > 0))
@@ -97,8 +102,14 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
         if (ic.gas.x[i][k] < -ic.box_size[k] || ic.gas.x[i][k] > 2 * ic.box_size[k])
           throw InputError(fmt::format("{}: particle ID {} lies far outside the periodic box", resolve_ic_path(params),
                                        ic.gas.id[i]));
+  if (config.space.periodic)
+    for (std::size_t i = 0; i < ic.dm.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        if (ic.dm.x[i][k] < -ic.box_size[k] || ic.dm.x[i][k] > 2 * ic.box_size[k])
+          throw InputError(fmt::format("{}: dark matter particle ID {} lies far outside the periodic box",
+                                       resolve_ic_path(params), ic.dm.id[i]));
 
-  Engine engine(config, std::move(ic.gas));
+  Engine engine(config, std::move(ic.gas), std::move(ic.dm));
   const bool dump_timeline = config.output.dump_timeline_every > 0;
   engine.set_record_timeline(dump_timeline || config.output.dump_task_graph);
   if (restart) {
@@ -126,7 +137,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     info.step = engine.steps();
     const std::string path = fmt::format("{}/{}_{:04d}.hdf5", config.output.directory, config.output.basename,
                                          summary.snapshots);
-    io::write_snapshot(path, engine.gas(), info);
+    io::write_snapshot(path, engine.gas(), engine.dark_matter(), info);
     if (!quiet) fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info.time);
     ++summary.snapshots;
   };
@@ -145,6 +156,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     engine.rebuild_now();
     io::RestartState out;
     out.gas = engine.gas();
+    out.dm = engine.dark_matter();
     out.ti_current = engine.ti_current();
     out.steps = engine.steps();
     out.snapshots_written = summary.snapshots;
