@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/Error.hpp"
+#include "cooling/CoolingLoop.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "timestep/Integration.hpp"
@@ -28,7 +29,12 @@ Engine::Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm
     throw InputError(fmt::format("the initial conditions hold {} dark matter particles but gravity is off "
                                  "(set gravity.enabled: true)",
                                  dm_.size()));
-  ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_, dm_, config_.gravity, {}});
+  ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_, dm_, config_.gravity, nullptr, {}});
+  if (config_.cooling.enabled) {
+    cooling_table_ = std::make_unique<cooling::CoolingTable>(config_.cooling.tables(), config_.cooling.metallicity);
+    cooling_ = std::make_unique<cooling::RadiativeCooling>(*cooling_table_, config_.units, config_.cooling.hydrogen_fraction);
+    ctx_->cooling = cooling_.get();
+  }
   guess_smoothing_lengths();
 }
 
@@ -113,6 +119,7 @@ void Engine::build_graph() {
     }
     kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
     graph_.add(types_.timestep, c, -1, c);
+    if (cooling_ && space_.cell(c).count > 0) graph_.add(types_.cooling, c, -1, c);
     graph_.add(types_.kick_open, c, -1, c);
     cell_tasks_[c].second = graph_.size();
   }
@@ -168,7 +175,8 @@ std::size_t Engine::activate(Phase phase) {
   }
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
-    if (phase == Phase::Hydro) return type != types_.kick_close && type != types_.timestep && type != types_.kick_open;
+    if (phase == Phase::Hydro)
+      return type != types_.kick_close && type != types_.timestep && type != types_.cooling && type != types_.kick_open;
     return true;
   };
   for (int c : leaves) {
@@ -226,6 +234,7 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.gravity) gravity::walk_cell(ctx, t.ci);
     else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
+    else if (t.type == T.cooling) cooling::cool_cell(ctx, t.ci);
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
   };
   executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr, &step_tasks_);

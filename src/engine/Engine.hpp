@@ -3,6 +3,7 @@
 #include <memory>
 #include <vector>
 
+#include "cooling/RadiativeCooling.hpp"
 #include "engine/RunConfig.hpp"
 #include "engine/StepContext.hpp"
 #include "engine/TaskTypes.hpp"
@@ -99,6 +100,8 @@ class Engine {
   tasks::TaskGraph graph_;
   tasks::Executor executor_;
   std::unique_ptr<StepContext> ctx_;
+  std::unique_ptr<cooling::CoolingTable> cooling_table_;
+  std::unique_ptr<cooling::RadiativeCooling> cooling_;
   std::vector<tasks::TaskRecord> records_;
   std::vector<char> cell_active_;
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)

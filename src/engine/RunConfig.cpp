@@ -31,6 +31,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.units.mass_cgs = p.real("units.mass_cgs");
   c.units.velocity_cgs = p.real("units.velocity_cgs");
   c.gravity = GravityParams::from(p, c.units);
+  c.cooling = CoolingParams::from(p);
   c.output.directory = p.text("output.directory");
   c.output.basename = p.text("output.basename");
   c.output.delta_time = p.real("output.delta_time");

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/Units.hpp"
+#include "cooling/CoolingParams.hpp"
 #include "engine/StepContext.hpp"
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
@@ -33,6 +34,7 @@ struct RunConfig {
   double smoothing_length_guess = 0.0;
   HydroParams hydro;
   GravityParams gravity;
+  CoolingParams cooling;
   IntegrationParams integration;
   SpaceConfig space;
   Units units;

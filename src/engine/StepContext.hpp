@@ -13,6 +13,10 @@
 
 namespace fountain {
 
+namespace cooling {
+class RadiativeCooling;
+}
+
 struct IntegrationParams {
   double dt_min = 1e-8;
   double dt_max = 1e-6;
@@ -26,6 +30,10 @@ struct StepContext {
   const TimeLine& timeline;
   DarkMatterParticles& dm;
   const GravityParams& gravity;
+
+  // Radiative cooling, when on (the engine owns it). Without it the kicks never let u fall
+  // below half in one kick; with it the cooling task's implicit rate keeps u positive.
+  const cooling::RadiativeCooling* cooling = nullptr;
 
   // This step's gravity tree, built by the tree task from every particle's drifted position.
   std::unique_ptr<gravity::GravityTree> tree;

@@ -6,7 +6,7 @@ namespace fountain {
 
 struct TaskTypes {
   int drift, density_self, density_pair, ghost, force_self, force_pair, gravity_tree, gravity, kick_close, timestep,
-      kick_open;
+      cooling, kick_open;
   tasks::TaskTypeRegistry registry;
 
   TaskTypes() {
@@ -20,6 +20,7 @@ struct TaskTypes {
     gravity = registry.add({"gravity", "walk", "gravity"});
     kick_close = registry.add({"kick", "close", "integration"});
     timestep = registry.add({"timestep", "", "integration"});
+    cooling = registry.add({"cooling", "", "cooling"});
     kick_open = registry.add({"kick", "open", "integration"});
   }
 };

@@ -79,6 +79,11 @@ const std::vector<ParamSpec>& parameter_schema() {
       text("gravity.opening_criterion", "gadget2", "gadget2: G M l^2/r^4 <= alpha |a_old| (GADGET, the paper); quadrupole: G M l^3/r^5 (GADGET-4, matched to the quadrupole expansion).",
            {"gadget2", "quadrupole"}),
       real("gravity.eta", "0.08", 0, 10, "Gravitational timestep dt = sqrt(2 eta eps / |a|).", true),
+      // cooling
+      boolean("cooling.enabled", "false", "Optically thin radiative cooling from the Sutherland & Dopita (1993) CIE tables, implicit per particle."),
+      text("cooling.metallicity", "primordial", "Gas metallicity: 'primordial' or [Fe/H] between -3 and 0.5 (the paper tracks no enrichment)."),
+      text("cooling.table_directory", "", "Folder of the SD93 .cie tables; empty uses the copy shipped in data/cooling/sutherland_dopita_1993."),
+      real("cooling.hydrogen_fraction", "0.76", 0, 1, "Hydrogen mass fraction X (n_H = X rho / m_p).", true),
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),

@@ -26,10 +26,11 @@ namespace {
 // exp(x), with the argument kept small: drifting h and rho is a prediction, not a law.
 double bounded_exp(double x) { return std::exp(std::clamp(x, -0.2, 0.2)); }
 
-// u after a kick, never dropping by more than half in one kick (as GADGET does).
-double kicked_energy(double u, double du_dt, double dt) {
+// u after a kick, never dropping by more than half in one kick (as GADGET does) unless the
+// rate came from the cooling task's implicit solve, which already ends the step at u > 0.
+double kicked_energy(const StepContext& ctx, double u, double du_dt, double dt) {
   const double next = u + du_dt * dt;
-  return next < 0.5 * u ? 0.5 * u : next;
+  return next < 0.5 * u && !ctx.cooling ? 0.5 * u : next;
 }
 
 // The gravitational criterion of the paper (GADGET): sqrt(2 eta eps / |a|).
@@ -51,7 +52,7 @@ void drift(StepContext& ctx, int c) {
     if (dt != 0.0) {
       gas.x[i] += gas.v_full[i] * dt;
       gas.v[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
-      gas.u[i] = kicked_energy(gas.u[i], gas.du_dt[i], dt);
+      gas.u[i] = kicked_energy(ctx, gas.u[i], gas.du_dt[i], dt);
       gas.h[i] *= bounded_exp(gas.div_v[i] * dt / 3.0);
       gas.rho[i] *= bounded_exp(-gas.div_v[i] * dt);
     }
@@ -79,7 +80,7 @@ void kick_close(StepContext& ctx, int c) {
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
       gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
-      gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
+      gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], dt);
     }
     gas.v[i] = gas.v_full[i];
     gas.u[i] = gas.u_full[i];
@@ -154,7 +155,7 @@ void kick_open(StepContext& ctx, int c) {
     if (ctx.is_active(i)) {
       const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
       gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
-      gas.u_full[i] = kicked_energy(gas.u_full[i], gas.du_dt[i], dt);
+      gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], dt);
     }
     v_max = std::max(v_max, norm(gas.v_full[i]));
   }
