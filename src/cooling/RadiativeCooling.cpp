@@ -1,5 +1,6 @@
 #include "cooling/RadiativeCooling.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace fountain::cooling {
@@ -7,11 +8,39 @@ namespace fountain::cooling {
 namespace {
 constexpr double k_boltzmann = 1.380649e-16;  // erg/K
 constexpr double m_proton = 1.67262192e-24;   // g
+constexpr double kNodeStep = 0.05;             // the tables' spacing in log T
+double node_log_t(int k) { return CoolingTable::log_t_min + kNodeStep * k; }
+
+// Root of f on [lo, hi] with f(lo) <= 0 <= f(hi), by regula falsi with the Illinois
+// modification: superlinear on smooth f, and never leaves the bracket.
+template <class F>
+double bracketed_root(F&& f, double lo, double hi, double f_lo, double f_hi, double tolerance) {
+  int side = 0;
+  for (int it = 0; it < 100 && hi - lo > tolerance; ++it) {
+    double x = f_hi != f_lo ? lo - f_lo * (hi - lo) / (f_hi - f_lo) : 0.5 * (lo + hi);
+    if (!(x > lo && x < hi)) x = 0.5 * (lo + hi);
+    const double fx = f(x);
+    if (fx == 0.0) return x;
+    if (fx < 0.0) {
+      lo = x, f_lo = fx;
+      if (side == -1) f_hi *= 0.5;
+      side = -1;
+    } else {
+      hi = x, f_hi = fx;
+      if (side == 1) f_lo *= 0.5;
+      side = 1;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
 }  // namespace
 
 RadiativeCooling::RadiativeCooling(const CoolingTable& table, const Units& units, double hydrogen_fraction)
     : table_(table), units_(units), x_h_(hydrogen_fraction) {
   u_floor_ = energy_at(std::pow(10.0, CoolingTable::log_t_min));
+  u_max_ = energy_at(std::pow(10.0, CoolingTable::log_t_max));
+  const int nodes = static_cast<int>(std::lround((CoolingTable::log_t_max - CoolingTable::log_t_min) / kNodeStep)) + 1;
+  for (int k = 0; k < nodes; ++k) log_u_nodes_.push_back(std::log(energy_at(std::pow(10.0, node_log_t(k)))));
 }
 
 double RadiativeCooling::energy_at(double t) const {
@@ -24,14 +53,15 @@ double RadiativeCooling::temperature(double u) const {
   const double t_min = std::pow(10.0, CoolingTable::log_t_min), t_max = std::pow(10.0, CoolingTable::log_t_max);
   // Outside the table the mean particle mass is held at its end values, so u is linear in T.
   if (u <= u_floor_) return t_min * u / u_floor_;
-  const double u_max = energy_at(t_max);
-  if (u >= u_max) return t_max * u / u_max;
-  double lo = CoolingTable::log_t_min, hi = CoolingTable::log_t_max;
-  for (int it = 0; it < 50; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (energy_at(std::pow(10.0, mid)) < u ? lo : hi) = mid;
-  }
-  return std::pow(10.0, 0.5 * (lo + hi));
+  if (u >= u_max_) return t_max * u / u_max_;
+  // u(T) is monotonic: find the table interval holding u, then solve inside it.
+  const double log_u = std::log(u);
+  const auto it = std::upper_bound(log_u_nodes_.begin(), log_u_nodes_.end(), log_u);
+  const int k = std::clamp(static_cast<int>(it - log_u_nodes_.begin()) - 1, 0, static_cast<int>(log_u_nodes_.size()) - 2);
+  const double lo = node_log_t(k), hi = node_log_t(k + 1);
+  auto f = [&](double log_t) { return std::log(energy_at(std::pow(10.0, log_t))) - log_u; };
+  const double log_t = bracketed_root(f, lo, hi, log_u_nodes_[k] - log_u, log_u_nodes_[k + 1] - log_u, 1e-13);
+  return std::pow(10.0, log_t);
 }
 
 double RadiativeCooling::du_dt(double rho, double u) const {
@@ -48,15 +78,14 @@ double RadiativeCooling::du_dt(double rho, double u) const {
 double RadiativeCooling::implicit_step(double rho, double u_old, double du_dt_hydro, double dt) const {
   const double u_free = u_old + dt * du_dt_hydro;
   if (u_free <= u_floor_ || dt <= 0.0) return u_free;
-  // g(u) = u - u_free - dt du_dt(u): g(u_floor) < 0 <= g(u_free). Bisection in log u.
-  double lo = std::log(u_floor_), hi = std::log(u_free);
   if (du_dt(rho, u_free) == 0.0) return u_free;
-  for (int it = 0; it < 80 && hi - lo > 1e-14; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    const double u = std::exp(mid);
-    (u - u_free - dt * du_dt(rho, u) < 0.0 ? lo : hi) = mid;
-  }
-  return std::exp(0.5 * (lo + hi));
+  // g(u) = u - u_free - dt du_dt(u): g(u_floor) < 0 <= g(u_free); solved in log u.
+  auto g = [&](double log_u) {
+    const double u = std::exp(log_u);
+    return u - u_free - dt * du_dt(rho, u);
+  };
+  const double lo = std::log(u_floor_), hi = std::log(u_free);
+  return std::exp(bracketed_root(g, lo, hi, g(lo), g(hi), 1e-13));
 }
 
 }  // namespace fountain::cooling

@@ -1,6 +1,8 @@
 // Optically thin radiative cooling from the SD93 tables, integrated implicitly (PHYSICS.md §4).
 #pragma once
 #include "cooling/CoolingTable.hpp"
+#include <vector>
+
 #include "core/Units.hpp"
 
 namespace fountain::cooling {
@@ -29,6 +31,8 @@ class RadiativeCooling {
   Units units_;
   double x_h_;
   double u_floor_;
+  double u_max_;                    // energy at the table's highest temperature
+  std::vector<double> log_u_nodes_;  // log u at the table's temperatures: brackets T(u)
 };
 
 }  // namespace fountain::cooling
