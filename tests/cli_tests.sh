@@ -121,7 +121,7 @@ with h5py.File('zero.hdf5', 'w') as f:
     "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
   corrupted_restart)
     params good.hdf5 out "restart:
-  every_steps: 2"
+  every_steps: 1"
     "$bin" run params.yml -q > /dev/null 2>&1 || fail "run"
     "$python" -c "
 import h5py

@@ -6,11 +6,13 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "core/Error.hpp"
 #include "engine/Engine.hpp"
 #include "io/InitialConditions.hpp"
 #include "io/RestartFile.hpp"
+#include "io/StatisticsFile.hpp"
 #include "io/Snapshot.hpp"
 #include "params/ParameterFile.hpp"
 #include "tasks/TaskGraphDump.hpp"
@@ -172,6 +174,20 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     return t >= config.t_end ? TimeLine::ticks : engine.to_ticks(t);
   };
   IntegerTime ti_out = next_output_ticks();
+
+  std::unique_ptr<io::StatisticsFile> statistics;
+  if (config.output.statistics_every > 0)
+    statistics = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", restart);
+  const analysis::TemperatureOf temperature =
+      engine.cooling() ? analysis::TemperatureOf([c = engine.cooling()](double u) { return c->temperature(u); })
+                       : analysis::ideal_gas_temperature(config.units, config.hydro.gamma);
+  const analysis::PhaseThresholds phases = analysis::PhaseThresholds::paper(config.units);
+  auto write_statistics = [&] {
+    statistics->write(engine.time(), engine.steps(),
+                      analysis::measure(engine.gas(), engine.dark_matter(), temperature, phases));
+  };
+  if (statistics && !restart) write_statistics();
+
   while (!engine.finished()) {
     if (config.max_steps > 0 && engine.steps() >= config.max_steps) break;
     const StepInfo s = engine.step(ti_out);
@@ -181,6 +197,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     if (dump_timeline && s.active > 0 && s.step % config.output.dump_timeline_every == 0)
       tasks::write_timeline_csv(engine.graph(), engine.task_types().registry, engine.last_records(), 0, s.step,
                                 fmt::format("{}/timeline_step{:06d}.csv", config.output.directory, s.step));
+    if (statistics && (engine.steps() % config.output.statistics_every == 0 || engine.finished())) write_statistics();
     if (engine.ti_current() == ti_out && !engine.finished()) {
       write();
       ++next_output;

@@ -68,15 +68,20 @@ void Engine::rebuild() {
   // Every particle must sit at the current time before cells are recut.
   drift_all();
   space_.rebuild(gas_, dm_);
-  auto step_end = [&](TimeBin bin) {
-    return TimeLine::active(bin, ti_current_) ? ti_current_ : TimeLine::step_end(bin, ti_current_);
+  // A particle whose step ends now is due; one whose step began now (a rebuild between
+  // steps, as for a restart file) is not, though its bin is aligned with the time too.
+  auto step_end = [&](TimeBin bin, IntegerTime ti_begin) {
+    const bool due = TimeLine::active(bin, ti_current_) && (!initialised_ || ti_begin != ti_current_);
+    return due ? ti_current_ : TimeLine::step_end(bin, ti_current_);
   };
   for (int c : space_.leaves()) {
     Cell& cell = space_.cell(c);
     cell.ti_drift = ti_current_;
     IntegerTime end = TimeLine::ticks;
-    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) end = std::min(end, step_end(gas_.time_bin[i]));
-    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) end = std::min(end, step_end(dm_.time_bin[i]));
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+      end = std::min(end, step_end(gas_.time_bin[i], gas_.ti_begin[i]));
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
+      end = std::min(end, step_end(dm_.time_bin[i], dm_.ti_begin[i]));
     cell.ti_end_min = end;
   }
   ctx_->dx_bound = 0.0;
@@ -250,8 +255,12 @@ void Engine::run_graph(StepInfo* info) {
 }
 
 void Engine::initialise() {
-  for (auto& b : gas_.time_bin) b = 0;
-  for (auto& b : dm_.time_bin) b = 0;
+  // Every particle is active at t = 0 whatever its bin. The placeholder is the largest bin,
+  // so the first timestep is not held down by the limiter comparing with placeholders (the
+  // first force loop's wake requests then bring slow neighbours of fast particles down).
+  const TimeBin start = static_cast<TimeBin>(std::max(0, timeline_.bin_for(config_.integration.dt_max)));
+  for (auto& b : gas_.time_bin) b = start;
+  for (auto& b : dm_.time_bin) b = start;
   ti_current_ = 0;
   for (auto& t : gas_.ti_begin) t = 0;
   for (auto& t : dm_.ti_begin) t = 0;
@@ -269,6 +278,7 @@ void Engine::initialise() {
   activate(Phase::Full);
   run_graph(nullptr);
   wake_requested();
+  initialised_ = true;
 }
 
 void Engine::rebuild_now() {
@@ -277,6 +287,7 @@ void Engine::rebuild_now() {
 }
 
 void Engine::restore(IntegerTime ti_current, long long steps) {
+  initialised_ = true;
   ti_current_ = ti_current;
   steps_ = steps;
   rebuild_now();

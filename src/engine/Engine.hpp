@@ -77,6 +77,8 @@ class Engine {
   const tasks::TaskGraph& graph() const { return graph_; }
   const std::vector<tasks::TaskRecord>& last_records() const { return records_; }
   int threads() const { return executor_.threads(); }
+  // The run's radiative cooling, or null when it is off.
+  const cooling::RadiativeCooling* cooling() const { return cooling_.get(); }
   Totals totals() const;
   void set_record_timeline(bool on) { record_timeline_ = on; }
 
@@ -110,6 +112,7 @@ class Engine {
   IntegerTime ti_current_ = 0;
   long long steps_ = 0;
   bool rebuild_pending_ = true;
+  bool initialised_ = false;  // the first forces and timesteps are done
   bool record_timeline_ = false;
 };
 

@@ -37,6 +37,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.output.delta_time = p.real("output.delta_time");
   c.output.dump_task_graph = p.flag("output.dump_task_graph");
   c.output.dump_timeline_every = p.integer("output.dump_timeline_every");
+  c.output.statistics_every = p.integer("output.statistics_every");
   c.restart.every_steps = p.integer("restart.every_steps");
   c.restart.every_minutes = p.real("restart.every_minutes");
   c.parameters_yaml = p.used_as_yaml();

@@ -19,6 +19,7 @@ struct OutputConfig {
   double delta_time = 0.0;          // 0: first and last only
   bool dump_task_graph = false;
   long long dump_timeline_every = 0;
+  long long statistics_every = 0;
 };
 
 struct RestartConfig {

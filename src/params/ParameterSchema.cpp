@@ -48,6 +48,8 @@ const std::vector<ParamSpec>& parameter_schema() {
               "Write the task dependency graph (DOT and SWIFT-style CSV) after the first step."),
       integer("output.dump_timeline_every", "0", 0, 1e15,
               "Write a per-task timeline (CSV) every this many steps; 0 never."),
+      integer("output.statistics_every", "0", 0, 1e15,
+              "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never."),
       // restart
       integer("restart.every_steps", "0", 0, 1e15,
               "Write <output.directory>/restart.hdf5 every this many steps; 0 never (SIGTERM always writes one)."),

@@ -1,0 +1,28 @@
+// The statistics file: one line of global diagnostics every few steps, for plots and conservation checks.
+#pragma once
+#include <cstdio>
+#include <string>
+
+#include "analysis/Diagnostics.hpp"
+
+namespace fountain::io {
+
+// A whitespace-separated text table with a commented header naming each column and its
+// units; numpy.genfromtxt(names=True) reads it. Each line is flushed as written, so a killed
+// run keeps what it measured.
+class StatisticsFile {
+ public:
+  // Creates `path` (or, when `append`, continues it after a restart).
+  StatisticsFile(const std::string& path, bool append);
+  ~StatisticsFile();
+  StatisticsFile(const StatisticsFile&) = delete;
+  StatisticsFile& operator=(const StatisticsFile&) = delete;
+
+  void write(double time, long long step, const analysis::Diagnostics& d);
+
+ private:
+  std::string path_;
+  std::FILE* file_ = nullptr;
+};
+
+}  // namespace fountain::io

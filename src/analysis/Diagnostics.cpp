@@ -1,0 +1,40 @@
+#include "analysis/Diagnostics.hpp"
+
+namespace fountain::analysis {
+
+TemperatureOf ideal_gas_temperature(const Units& units, double gamma, double mean_molecular_weight) {
+  constexpr double k_boltzmann = 1.380649e-16, m_proton = 1.67262192e-24;
+  const double factor = (gamma - 1.0) * mean_molecular_weight * m_proton / k_boltzmann * units.specific_energy_cgs();
+  return [factor](double u) { return factor * u; };
+}
+
+Diagnostics measure(const GasParticles& gas, const DarkMatterParticles& dm, const TemperatureOf& temperature,
+                    const PhaseThresholds& phases) {
+  Diagnostics d;
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    const double m = gas.mass[i];
+    const double v2 = dot(gas.v[i], gas.v[i]);
+    d.mass_gas += m;
+    const double t = temperature(gas.u[i]);
+    if (t > 2.0 * phases.t_star_k) d.mass_hot += m;
+    else if (gas.rho[i] > 0.1 * phases.rho_star_internal) d.mass_cold += m;
+    else d.mass_warm += m;
+    if (0.5 * v2 + gas.potential[i] > 0.0) d.mass_unbound += m;
+    d.thermal += m * gas.u[i];
+    d.kinetic += 0.5 * m * v2;
+    d.potential += 0.5 * m * gas.potential[i];
+    d.momentum += gas.v[i] * m;
+    d.angular_momentum += cross(gas.x[i], gas.v[i]) * m;
+  }
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    const double m = dm.mass[i];
+    d.mass_dark_matter += m;
+    d.kinetic += 0.5 * m * dot(dm.v_full[i], dm.v_full[i]);
+    d.potential += 0.5 * m * dm.potential[i];
+    d.momentum += dm.v_full[i] * m;
+    d.angular_momentum += cross(dm.x[i], dm.v_full[i]) * m;
+  }
+  return d;
+}
+
+}  // namespace fountain::analysis

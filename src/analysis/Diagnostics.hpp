@@ -1,0 +1,42 @@
+// The paper's time-series diagnostics (PHYSICS.md section 7): gas phases, energies, momenta, unbound gas.
+#pragma once
+#include <functional>
+
+#include "core/Units.hpp"
+#include "core/Vec3.hpp"
+#include "particles/DarkMatterParticles.hpp"
+#include "particles/GasParticles.hpp"
+
+namespace fountain::analysis {
+
+// Phase boundaries of the paper's analysis (section 3.2): hot T > 2 T*; cold T <= 2 T* and
+// rho > 0.1 rho*; warm otherwise.
+struct PhaseThresholds {
+  double t_star_k = 4.0e4;           // T*
+  double rho_star_internal = 0.0;    // rho* = 5e-26 g cm^-3 in internal density units (physical)
+
+  static PhaseThresholds paper(const Units& units) { return {4.0e4, 5.0e-26 / units.density_cgs()}; }
+};
+
+struct Diagnostics {
+  double mass_gas = 0.0, mass_dark_matter = 0.0;
+  double mass_hot = 0.0, mass_warm = 0.0, mass_cold = 0.0;
+  double mass_unbound = 0.0;         // gas with v^2/2 + potential > 0
+  double thermal = 0.0, kinetic = 0.0, potential = 0.0;
+  Vec3 momentum, angular_momentum;   // about the origin
+  double total_energy() const { return thermal + kinetic + potential; }
+};
+
+// Temperature (K) of gas of specific energy u (internal units).
+using TemperatureOf = std::function<double(double u)>;
+
+// T of a fully ionised primordial gas (mean molecular weight 0.59), for runs without the
+// cooling tables' own mean particle mass.
+TemperatureOf ideal_gas_temperature(const Units& units, double gamma, double mean_molecular_weight = 0.59);
+
+// Sums over the current particle state (gas at its predicted values; potentials from the
+// last force computation, zero without gravity).
+Diagnostics measure(const GasParticles& gas, const DarkMatterParticles& dm, const TemperatureOf& temperature,
+                    const PhaseThresholds& phases);
+
+}  // namespace fountain::analysis
