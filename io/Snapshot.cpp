@@ -295,6 +295,13 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     file.write_dataset(ds("TimeBin"), bins);
     write_dataset_units(file, ds("TimeBin"), units, {0, 0, 0, 0},
                         "Time bins of the particles (step = 2^bin integer time units)");
+    if (info.temperature) {
+      std::vector<double> temperature(gas.size());
+      for (std::size_t i = 0; i < gas.size(); ++i) temperature[i] = info.temperature(gas.u[i]);
+      file.write_dataset(ds("Temperature"), temperature);
+      write_dataset_units(file, ds("Temperature"), units, {0, 0, 0, 0},
+                          "Temperatures of the particles in K, with the cooling tables' mean particle mass");
+    }
     file.write_dataset(ds("Potential"), gas.potential);
     write_dataset_units(file, ds("Potential"), units, kPotential,
                         "Specific gravitational potentials of the particles at the last force computation "

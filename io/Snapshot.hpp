@@ -1,5 +1,6 @@
 // HDF5 snapshots in the GADGET/SWIFT layout, with units, the parameters used and the git revision.
 #pragma once
+#include <functional>
 #include <string>
 
 #include "core/Units.hpp"
@@ -19,6 +20,8 @@ struct SnapshotInfo {
   std::string parameters_yaml;  // every parameter in force
   std::string git_revision;
   std::string build_options;
+  // Temperature (K) of gas of specific energy u; when set, gas gets a Temperature dataset.
+  std::function<double(double)> temperature;
 };
 
 // Writes `path` (to a temporary name first, renamed on success, so a full disk never

@@ -132,6 +132,11 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   info.git_revision = git_revision();
   info.build_options = build_options();
 
+  const analysis::TemperatureOf temperature =
+      engine.cooling() ? analysis::TemperatureOf([c = engine.cooling()](double u) { return c->temperature(u); })
+                       : analysis::ideal_gas_temperature(config.units, config.hydro.gamma);
+  info.temperature = temperature;
+
   RunSummary summary;
   auto write = [&] {
     engine.drift_all();
@@ -178,9 +183,6 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   std::unique_ptr<io::StatisticsFile> statistics;
   if (config.output.statistics_every > 0)
     statistics = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", restart);
-  const analysis::TemperatureOf temperature =
-      engine.cooling() ? analysis::TemperatureOf([c = engine.cooling()](double u) { return c->temperature(u); })
-                       : analysis::ideal_gas_temperature(config.units, config.hydro.gamma);
   const analysis::PhaseThresholds phases = analysis::PhaseThresholds::paper(config.units);
   auto write_statistics = [&] {
     statistics->write(engine.time(), engine.steps(),

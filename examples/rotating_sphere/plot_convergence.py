@@ -1,0 +1,154 @@
+#!/usr/bin/env python3
+"""Figures like Marri & White (2003) Figs 1-3 from the runs of run_convergence.sh, and the
+table of gas phases at the last output (about 1.2 Gyr).
+
+    /usr/bin/python3 examples/rotating_sphere/plot_convergence.py examples/rotating_sphere/output \
+        [--docs docs/validation]
+
+Phases (PHYSICS.md section 7, the paper's section 3.2): hot T > 2 T* = 8e4 K; cold T <= 2 T*
+and rho > 0.1 rho* (rho* = 5e-26 g/cm^3); warm otherwise. Times in Gyr for h = 1.
+"""
+import argparse
+import glob
+import os
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+T_STAR = 4.0e4
+RHO_STAR_CGS = 5.0e-26
+K_B, M_P = 1.380649e-16, 1.67262192e-24
+
+
+def read_statistics(path):
+    with open(path) as f:
+        names = [line for line in f if line.startswith("#")][-1].lstrip("#").split()
+    data = np.loadtxt(path, comments="#", ndmin=2)
+    return {n: data[:, k] for k, n in enumerate(names)}
+
+
+def runs(folder):
+    """{(n, scheme): run folder} for every run with a statistics file."""
+    found = {}
+    for d in sorted(glob.glob(os.path.join(folder, "*_*"))):
+        name = os.path.basename(d)
+        n, _, scheme = name.partition("_")
+        if n.isdigit() and os.path.exists(os.path.join(d, "statistics.txt")):
+            found[(int(n), scheme)] = d
+    return found
+
+
+def last_snapshot(run):
+    snaps = sorted(glob.glob(os.path.join(run, "snapshot_*.hdf5")))
+    return snaps[-1] if snaps else None
+
+
+def gas_state(path):
+    with h5py.File(path, "r") as f:
+        units = f["Units"].attrs
+        length, mass, velocity = units["UnitLength_in_cm"], units["UnitMass_in_g"], units["UnitVelocity_in_cm_per_s"]
+        g = f["PartType0"]
+        x = g["Coordinates"][...]
+        rho_cgs = g["Density"][...] * mass / length**3
+        if "Temperature" in g:
+            temp = g["Temperature"][...]
+        else:  # older snapshots: a fully ionised primordial gas
+            temp = (2.0 / 3.0) * 0.59 * M_P / K_B * g["InternalEnergy"][...] * velocity**2
+        m = g["Masses"][...]
+        t_gyr = f["Header"].attrs["Time"] * length / velocity / 3.15576e16
+    return x, rho_cgs, temp, m, t_gyr
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("folder")
+    ap.add_argument("--docs", default=None, help="also write the figures and the table here")
+    a = ap.parse_args()
+    found = runs(a.folder)
+    if not found:
+        raise SystemExit(f"no runs with statistics in {a.folder}")
+    out = a.docs or a.folder
+    os.makedirs(out, exist_ok=True)
+    sizes = sorted({n for n, _ in found})
+    width = {n: 0.8 + 1.0 * k for k, n in enumerate(sizes)}
+
+    # Fig 1: phase fractions and thermal energy against time.
+    fig, ax = plt.subplots(2, 2, figsize=(11, 8))
+    panels = [("mass_hot", "hot", ax[0, 0]), ("mass_warm", "warm", ax[0, 1]), ("mass_cold", "cold", ax[1, 0])]
+    for (n, scheme), run in sorted(found.items()):
+        s = read_statistics(os.path.join(run, "statistics.txt"))
+        t = s["time"] * 977.8
+        style = "-" if scheme == "sph" else "--"
+        colour = "tab:red" if scheme == "sph" else "tab:blue"
+        label = f"{scheme.upper()} {n}"
+        for key, _, axis in panels:
+            axis.plot(t, s[key] / s["mass_gas"], style, color=colour, lw=width[n], label=label)
+        ax[1, 1].plot(t, s["thermal_energy"], style, color=colour, lw=width[n], label=label)
+    for key, name, axis in panels:
+        axis.set_ylabel(f"{name} gas fraction")
+    ax[1, 1].set_ylabel("total thermal energy (Msun/h (km/s)^2)")
+    for axis in ax.flat:
+        axis.set_xlabel("t (Gyr)")
+        axis.grid(alpha=0.3)
+    ax[0, 0].legend(fontsize=8)
+    fig.suptitle("Rotating sphere with cooling: SPH (solid) vs MSPH (dashed); thicker = more particles")
+    fig.tight_layout()
+    fig.savefig(os.path.join(out, "sphere_phases.png"), dpi=110)
+    plt.close(fig)
+
+    # Table at the last output of each run.
+    rows = ["| run | t (Gyr) | hot | warm | cold |", "|---|---|---|---|---|"]
+    for (n, scheme), run in sorted(found.items()):
+        s = read_statistics(os.path.join(run, "statistics.txt"))
+        g = s["mass_gas"][-1]
+        rows.append(f"| {scheme.upper()} {n} | {s['time'][-1] * 977.8:.3f} | {s['mass_hot'][-1] / g:.3f} | "
+                    f"{s['mass_warm'][-1] / g:.3f} | {s['mass_cold'][-1] / g:.3f} |")
+    table = "\n".join(rows) + "\n"
+    with open(os.path.join(out, "sphere_phases_table.md"), "w") as f:
+        f.write(table)
+    print(table)
+
+    # Figs 2 and 3 at the largest resolution with both schemes.
+    both = [n for n in sizes if (n, "sph") in found and (n, "msph") in found]
+    if not both:
+        return
+    n = both[-1]
+    fig2, ax2 = plt.subplots(2, 2, figsize=(9, 9))
+    fig3, ax3 = plt.subplots(2, 1, figsize=(7, 9), sharex=True)
+    for row, scheme in enumerate(("sph", "msph")):
+        snap = last_snapshot(found[(n, scheme)])
+        x, rho, temp, m, t = gas_state(snap)
+        hot = temp > 2 * T_STAR
+        cold = ~hot & (rho > 0.1 * RHO_STAR_CGS)
+        kpc = x * 1e3
+        for col, (sel, name) in enumerate(((hot, "hot"), (cold, "cold"))):
+            a2 = ax2[row, col]
+            a2.scatter(kpc[sel, 0], kpc[sel, 1], s=1.5, color="tab:red" if name == "hot" else "tab:blue")
+            a2.set_xlim(-60, 60)
+            a2.set_ylim(-60, 60)
+            a2.set_aspect("equal")
+            a2.set_title(f"{scheme.upper()} {n}: {name} ({sel.sum()} particles), t = {t:.2f} Gyr", fontsize=9)
+            a2.set_xlabel("x (kpc/h)")
+            a2.set_ylabel("y (kpc/h)")
+        r = np.linalg.norm(kpc, axis=1)
+        a3 = ax3[row]
+        a3.loglog(r[~hot], rho[~hot], ".", ms=2, color="tab:blue", label="T <= 2 T*")
+        a3.loglog(r[hot], rho[hot], "x", ms=3, color="tab:red", label="hot (T > 2 T*)")
+        a3.set_ylabel("gas density (g/cm^3)")
+        a3.set_title(f"{scheme.upper()} {n}, t = {t:.2f} Gyr", fontsize=9)
+        a3.legend(fontsize=8)
+        a3.grid(alpha=0.3)
+    ax3[-1].set_xlabel("r (kpc/h)")
+    fig2.tight_layout()
+    fig2.savefig(os.path.join(out, "sphere_faceon.png"), dpi=110)
+    fig3.tight_layout()
+    fig3.savefig(os.path.join(out, "sphere_density_profile.png"), dpi=110)
+    print(f"figures in {out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,68 @@
+#!/bin/sh
+# The convergence study of Marri & White (2003) section 3.2 (their Figs 1-3): the rotating
+# collapsing sphere (M = 1e12 Msun/h, R = 100 kpc/h, 90% dark matter, spin 0.1) with cooling
+# and no star formation, in standard SPH and MSPH, at 2000, 4000 and 8000 particles per
+# species with dark-matter softenings of 2, 1.5 and 1 kpc/h (gas: half), to t = 1.2 Gyr.
+#
+#   sh examples/rotating_sphere/run_convergence.sh            # all six runs, then the plots
+#   SIZES="2000" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
+#
+# Runs go to examples/rotating_sphere/output/<N>_<scheme>/; a finished run is not redone.
+# Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
+# the time unit is 977.8 Gyr, so 1.2 Gyr is t = 1.227e-3.
+set -eu
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/../.." && pwd)
+bin="$root/build/fountain"
+[ -x "$bin" ] || sh "$root/scripts/build.sh"
+out="$here/output"
+mkdir -p "$out"
+threads=${THREADS:-2}
+for n in ${SIZES:-2000 4000 8000}; do
+  case $n in
+    2000) eps=0.002 ;;
+    4000) eps=0.0015 ;;
+    8000) eps=0.001 ;;
+    *) eps=${SOFTENING:?set SOFTENING (Mpc/h) for N = $n} ;;
+  esac
+  ic="$out/sphere_$n.hdf5"
+  [ -f "$ic" ] || "$bin" ic sphere -n "$n" -o "$ic"
+  for scheme in sph msph; do
+    dir="$out/${n}_$scheme"
+    [ -f "$dir/done" ] && continue
+    mkdir -p "$dir"
+    msph=false
+    [ "$scheme" = msph ] && msph=true
+    cat > "$dir/params.yml" <<EOT
+# Rotating sphere, $n particles per species, $scheme, cooling on, star formation off.
+run:
+  t_end: 1.227e-3
+initial_conditions:
+  file: $ic
+output:
+  directory: $dir
+  delta_time: 1.227e-4
+  statistics_every: 20
+restart:
+  every_minutes: 10
+time_integration:
+  dt_max: 1.0e-6
+  dt_min: 1.0e-12
+hydro:
+  msph: $msph
+gravity:
+  enabled: true
+  softening_dark_matter: $eps
+cooling:
+  enabled: true
+EOT
+    echo "== $n per species, $scheme"
+    if [ -f "$dir/restart.hdf5" ]; then
+      "$bin" run "$dir/params.yml" -t "$threads" -q --restart
+    else
+      "$bin" run "$dir/params.yml" -t "$threads" -q
+    fi
+    touch "$dir/done"
+  done
+done
+/usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "$root/docs/validation"
