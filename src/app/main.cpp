@@ -31,12 +31,12 @@ int main(int argc, char** argv) {
   int resolution = 0;
   double gamma = 5.0 / 3.0;
   ics::RotatingSphereParams sphere;
-  ic->add_option("problem", problem, "sod | sedov | gresho | sphere")
+  ic->add_option("problem", problem, "sod | sedov | gresho | evrard | sphere")
       ->required()
-      ->check(CLI::IsMember({"sod", "sedov", "gresho", "sphere"}));
+      ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere"}));
   ic->add_option("-o,--output", out_path, "Output HDF5 file")->required();
   ic->add_option("-n,--resolution", resolution,
-                 "Lattice cells per unit length (sod: left state; sedov, gresho: per box side); "
+                 "Lattice cells per unit length (sod: left state; sedov, gresho: per box side; evrard: per radius); "
                  "sphere: particles per species (default 4000)");
   ic->add_option("--gamma", gamma, "Adiabatic index");
   ic->add_option("--mass", sphere.total_mass, "sphere: total mass, gas + DM [Msun/h]")->capture_default_str();
@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
         ics::ProblemIC p;
         if (problem == "sod") p = ics::sod_shock(resolution > 0 ? resolution : 32, gamma);
         else if (problem == "sedov") p = ics::sedov_blast(resolution > 0 ? resolution : 24, gamma);
+        else if (problem == "evrard") p = ics::evrard_sphere(resolution > 0 ? resolution : 8);
         else p = ics::gresho_vortex(resolution > 0 ? resolution : 32, gamma);
         io::write_initial_conditions(out_path, p.gas, p.box_size, p.periodic);
         fmt::print(stderr, "wrote {} ({} gas particles, box {} x {} x {})\n", out_path, p.gas.size(), p.box_size.x,
