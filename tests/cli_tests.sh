@@ -119,6 +119,58 @@ with h5py.File('zero.hdf5', 'w') as f:
     "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
     head -1 restart.txt
     "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
+  restart_after_kill_gravity)
+    # As restart_after_kill, with everything a restart must carry beyond the gas: a rotating
+    # sphere of gas and dark matter, self-gravity (open boundaries), cooling and MSPH, on
+    # individual timesteps (the collapse spreads the particles over several bins). Both runs
+    # write restart files every 25 steps (writing one recuts the cells, so A must write them
+    # too); B is killed with SIGKILL after one written at step 100 or later, and restarted.
+    "$bin" ic sphere -n 300 -o sphere.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
+    gparams() {  # gparams OUT_DIR
+      cat > params.yml <<EOT
+run:
+  t_end: 4e-4
+initial_conditions:
+  file: sphere.hdf5
+  periodic: false
+output:
+  directory: $1
+time_integration:
+  dt_max: 1e-5
+  dt_min: 1e-14
+hydro:
+  msph: true
+gravity:
+  enabled: true
+  softening_dark_matter: 0.002
+cooling:
+  enabled: true
+restart:
+  every_steps: 25
+EOT
+    }
+    gparams outA; cp params.yml paramsA.yml
+    gparams outB; cp params.yml paramsB.yml
+    "$bin" run paramsA.yml > runA.txt 2>&1 || { cat runA.txt; fail "uninterrupted run"; }
+    total=$(grep -c '^step' runA.txt)
+    "$bin" run paramsB.yml > runB.txt 2>&1 &
+    pid=$!
+    n=0
+    until grep -Eq 'restart file .* at step ([1-9][0-9][0-9]+)$' runB.txt || ! kill -0 "$pid" 2>/dev/null || [ $n -ge 3000 ]; do
+      sleep 0.01; n=$((n + 1))
+    done
+    kill -9 "$pid" 2>/dev/null || true
+    wait "$pid" 2>/dev/null || true
+    [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
+    [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was killed"
+    echo "killed after $(grep -c '^step' runB.txt) of $total steps; $(grep 'restart file' runB.txt | tail -1)"
+    "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
+    head -1 restart.txt
+    "$python" -c "
+import h5py, sys
+with h5py.File('outA/snapshot_0001.hdf5', 'r') as f:
+    sys.exit(0 if f['PartType1/Coordinates'].shape[0] > 0 else 1)" || fail "no dark matter in the snapshot"
+    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
   corrupted_restart)
     params good.hdf5 out "restart:
   every_steps: 1"
