@@ -152,6 +152,7 @@ DarkMatterParticles read_dark_matter(const File& file, std::uint64_t n, const st
   dm.mass = mass;
   dm.x = x;
   dm.v_full = v;
+  dm.v = v;
   return dm;
 }
 

@@ -82,6 +82,7 @@ void for_each_field(Dm& d, Fn&& fn) {
   fn("potential", d.potential);
   fn("x", d.x);
   fn("v_full", d.v_full);
+  fn("v", d.v);
   fn("a_grav", d.a_grav);
   fn("time_bin", d.time_bin);
 }

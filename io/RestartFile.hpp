@@ -9,7 +9,7 @@
 namespace fountain::io {
 
 // 3: dark matter (/DarkMatter), gas a_grav and potential, particle counts in /Restart.
-inline constexpr int kRestartFormatVersion = 3;
+inline constexpr int kRestartFormatVersion = 4;
 
 struct RestartState {
   GasParticles gas;

@@ -216,7 +216,7 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     if (n_dm > 0) {
       check_size(dm->mass, n_dm, "dark matter", "mass");
       check_size(dm->x, n_dm, "dark matter", "x");
-      check_size(dm->v_full, n_dm, "dark matter", "v_full");
+      check_size(dm->v, n_dm, "dark matter", "v");
       check_size(dm->a_grav, n_dm, "dark matter", "a_grav");
       check_size(dm->potential, n_dm, "dark matter", "potential");
     }
@@ -317,10 +317,8 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     auto dm_ds = [](const char* name) { return std::string("/PartType1/") + name; };
     file.write_dataset(dm_ds("Coordinates"), dm->x);
     write_dataset_units(file, dm_ds("Coordinates"), units, kPosition, "Positions of the particles");
-    file.write_dataset(dm_ds("Velocities"), dm->v_full);
-    write_dataset_units(file, dm_ds("Velocities"), units, kVelocity,
-                        "Velocities of the particles (the integrated velocity: half-kicked for particles "
-                        "in the middle of a step)");
+    file.write_dataset(dm_ds("Velocities"), dm->v);
+    write_dataset_units(file, dm_ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
     file.write_dataset(dm_ds("Masses"), dm->mass);
     write_dataset_units(file, dm_ds("Masses"), units, kMass, "Masses of the particles");
     file.write_dataset(dm_ds("ParticleIDs"), dm->id);

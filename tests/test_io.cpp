@@ -81,6 +81,7 @@ DarkMatterParticles make_dm(std::size_t n, std::uint64_t first_id = 100000) {
     dm.mass[i] = 7.0 + 0.125 * s;
     dm.x[i] = {std::fmod(0.53 * s, 2.0), 1.0 + 0.8 * std::cos(s), 0.5 + 1.0 / (s + 2.0)};
     dm.v_full[i] = {0.25 * s, -s, 3e-6 * s};
+    dm.v[i] = dm.v_full[i] * 0.5;
   }
   return dm;
 }
@@ -635,7 +636,7 @@ TEST_F(IoTest, SnapshotWithDarkMatter) {
   EXPECT_EQ(f.read_attribute_uint64("/Header", "NumPart_Total_HighWord"), std::vector<std::uint64_t>(6, 0));
   EXPECT_EQ(f.read_attribute_doubles("/Header", "MassTable"), std::vector<double>(6, 0.0));
   EXPECT_EQ(f.read_vec3("/PartType1/Coordinates"), dm.x);
-  EXPECT_EQ(f.read_vec3("/PartType1/Velocities"), dm.v_full);
+  EXPECT_EQ(f.read_vec3("/PartType1/Velocities"), dm.v);
   EXPECT_EQ(f.read_doubles("/PartType1/Masses"), dm.mass);
   EXPECT_EQ(f.read_uint64("/PartType1/ParticleIDs"), dm.id);
   EXPECT_EQ(f.read_doubles("/PartType1/Potential"), dm.potential);
@@ -702,7 +703,7 @@ fountain::io::RestartState restart_state(std::size_t n_gas, std::size_t n_dm) {
                   &s.gas.inv_rho_2ma, &s.gas.balsara, &s.gas.du_dt, &s.gas.potential, &s.dm.mass, &s.dm.potential})
     fill(*f);
   for (auto* f : {&s.gas.x, &s.gas.v_full, &s.gas.v, &s.gas.curl_v, &s.gas.a_hydro, &s.gas.a_grav, &s.dm.x,
-                  &s.dm.v_full, &s.dm.a_grav})
+                  &s.dm.v_full, &s.dm.v, &s.dm.a_grav})
     fill(*f);
   s.gas.potential[0] = -0.0;  // the sign of zero must survive too
   for (std::size_t i = 0; i < n_gas; ++i) {
@@ -730,7 +731,7 @@ TEST_F(IoTest, RestartRoundTripWithDarkMatterIsBitwise) {
   const auto s = restart_state(17, 29);
   const std::string path = file("restart.hdf5");
   fountain::io::write_restart(path, s);
-  EXPECT_EQ(fountain::io::kRestartFormatVersion, 3);
+  EXPECT_EQ(fountain::io::kRestartFormatVersion, 4);
   const auto r = fountain::io::read_restart(path);
 
   EXPECT_EQ(r.ti_current, s.ti_current);
@@ -754,7 +755,7 @@ TEST_F(IoTest, RestartRoundTripWithDarkMatterIsBitwise) {
   const auto &d = r.dm, &e = s.dm;
   ASSERT_EQ(d.size(), e.size());
 #define FOUNTAIN_SAME(field) EXPECT_TRUE(same_bits(d.field, e.field)) << "dm." #field
-  FOUNTAIN_SAME(id); FOUNTAIN_SAME(mass); FOUNTAIN_SAME(x); FOUNTAIN_SAME(v_full); FOUNTAIN_SAME(a_grav);
+  FOUNTAIN_SAME(id); FOUNTAIN_SAME(mass); FOUNTAIN_SAME(x); FOUNTAIN_SAME(v_full); FOUNTAIN_SAME(v); FOUNTAIN_SAME(a_grav);
   FOUNTAIN_SAME(potential); FOUNTAIN_SAME(time_bin); FOUNTAIN_SAME(ti_begin);
 #undef FOUNTAIN_SAME
 

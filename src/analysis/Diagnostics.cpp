@@ -29,10 +29,10 @@ Diagnostics measure(const GasParticles& gas, const DarkMatterParticles& dm, cons
   for (std::size_t i = 0; i < dm.size(); ++i) {
     const double m = dm.mass[i];
     d.mass_dark_matter += m;
-    d.kinetic += 0.5 * m * dot(dm.v_full[i], dm.v_full[i]);
+    d.kinetic += 0.5 * m * dot(dm.v[i], dm.v[i]);
     d.potential += 0.5 * m * dm.potential[i];
-    d.momentum += dm.v_full[i] * m;
-    d.angular_momentum += cross(dm.x[i], dm.v_full[i]) * m;
+    d.momentum += dm.v[i] * m;
+    d.angular_momentum += cross(dm.x[i], dm.v[i]) * m;
   }
   return d;
 }

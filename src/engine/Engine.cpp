@@ -352,8 +352,8 @@ Totals Engine::totals() const {
   for (std::size_t i = 0; i < dm_.size(); ++i) {
     const double m = dm_.mass[i];
     t.mass += m;
-    t.momentum += dm_.v_full[i] * m;
-    t.kinetic += 0.5 * m * dot(dm_.v_full[i], dm_.v_full[i]);
+    t.momentum += dm_.v[i] * m;
+    t.kinetic += 0.5 * m * dot(dm_.v[i], dm_.v[i]);
     t.potential += 0.5 * m * dm_.potential[i];
   }
   return t;

@@ -245,7 +245,7 @@ RotatingSphereIC rotating_sphere(const RotatingSphereParams& p) {
     dm.id[i] = n_gas + i + 1;
     dm.mass[i] = m_dm;
     dm.x[i] = x;
-    dm.v_full[i] = velocity(x);
+    dm.v_full[i] = dm.v[i] = velocity(x);
   }
   return ic;
 }

@@ -17,6 +17,7 @@ struct DarkMatterParticles {
   std::vector<double> mass;
   std::vector<Vec3> x;                 // position
   std::vector<Vec3> v_full;            // integrated velocity (half-step after a first kick)
+  std::vector<Vec3> v;                 // predicted velocity at the last drift (what outputs show)
 
   std::vector<Vec3> a_grav;            // gravitational acceleration at the last force computation
   std::vector<double> potential;       // specific gravitational potential there (for diagnostics)
@@ -27,7 +28,7 @@ struct DarkMatterParticles {
   std::size_t size() const { return id.size(); }
 
   void resize(std::size_t n) {
-    id.resize(n); mass.resize(n); x.resize(n); v_full.resize(n);
+    id.resize(n); mass.resize(n); x.resize(n); v_full.resize(n); v.resize(n);
     a_grav.resize(n); potential.resize(n);
     time_bin.resize(n); ti_begin.resize(n);
   }

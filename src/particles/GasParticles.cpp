@@ -39,7 +39,7 @@ void DarkMatterParticles::permute(const std::vector<std::size_t>& order) {
   apply(id, order, si);
   apply(mass, order, sd);
   apply(potential, order, sd);
-  for (auto* f : {&x, &v_full, &a_grav}) apply(*f, order, sv);
+  for (auto* f : {&x, &v_full, &v, &a_grav}) apply(*f, order, sv);
   apply(time_bin, order, sb);
   apply(ti_begin, order, st);
 }

@@ -63,7 +63,10 @@ void drift(StepContext& ctx, int c) {
   }
   if (dt != 0.0) {
     DarkMatterParticles& dm = ctx.dm;
-    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) dm.x[i] += dm.v_full[i] * dt;
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
+      dm.x[i] += dm.v_full[i] * dt;
+      dm.v[i] += dm.a_grav[i] * dt;
+    }
   }
   cell.dx_max += cell.v_max * std::fabs(dt);
   cell.ti_drift = ctx.ti_current;
@@ -87,7 +90,10 @@ void kick_close(StepContext& ctx, int c) {
   }
   DarkMatterParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
-    if (ctx.is_active_dm(i)) dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current));
+    if (ctx.is_active_dm(i)) {
+      dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current));
+      dm.v[i] = dm.v_full[i];
+    }
 }
 
 void timestep(StepContext& ctx, int c) {
