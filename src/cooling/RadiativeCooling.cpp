@@ -49,24 +49,36 @@ double RadiativeCooling::energy_at(double t) const {
   return u_cgs / units_.specific_energy_cgs();
 }
 
-double RadiativeCooling::temperature(double u) const {
-  const double t_min = std::pow(10.0, CoolingTable::log_t_min), t_max = std::pow(10.0, CoolingTable::log_t_max);
+double RadiativeCooling::log10_temperature(double u) const {
   // Outside the table the mean particle mass is held at its end values, so u is linear in T.
-  if (u <= u_floor_) return t_min * u / u_floor_;
-  if (u >= u_max_) return t_max * u / u_max_;
-  // u(T) is monotonic: find the table interval holding u, then solve inside it.
+  if (u <= u_floor_) return CoolingTable::log_t_min + std::log10(u / u_floor_);
+  if (u >= u_max_) return CoolingTable::log_t_max + std::log10(u / u_max_);
+  // u(T) is monotonic: find the table interval holding u, then solve inside it. There the
+  // mean particle mass is linear in x = log10 T, so ln u(x) = c + x ln 10 - ln mu(x) is smooth
+  // and nearly linear: Newton from the linear guess converges in a few steps.
   const double log_u = std::log(u);
   const auto it = std::upper_bound(log_u_nodes_.begin(), log_u_nodes_.end(), log_u);
   const int k = std::clamp(static_cast<int>(it - log_u_nodes_.begin()) - 1, 0, static_cast<int>(log_u_nodes_.size()) - 2);
-  const double lo = node_log_t(k), hi = node_log_t(k + 1);
-  auto f = [&](double log_t) { return std::log(energy_at(std::pow(10.0, log_t))) - log_u; };
-  const double log_t = bracketed_root(f, lo, hi, log_u_nodes_[k] - log_u, log_u_nodes_[k + 1] - log_u, 1e-13);
-  return std::pow(10.0, log_t);
+  const double x_lo = node_log_t(k), x_hi = node_log_t(k + 1);
+  const double mu_lo = table_.mean_particle_mass_g(x_lo), mu_slope = (table_.mean_particle_mass_g(x_hi) - mu_lo) / kNodeStep;
+  const double ln10 = std::log(10.0);
+  const double c = log_u_nodes_[k] - x_lo * ln10 + std::log(mu_lo);  // ln u = c + x ln10 - ln mu(x)
+  double x = x_lo + kNodeStep * (log_u - log_u_nodes_[k]) / (log_u_nodes_[k + 1] - log_u_nodes_[k]);
+  for (int iteration = 0; iteration < 8; ++iteration) {
+    const double mu = mu_lo + (x - x_lo) * mu_slope;
+    const double g = c + x * ln10 - std::log(mu) - log_u;
+    const double step = g / (ln10 - mu_slope / mu);
+    x = std::clamp(x - step, x_lo, x_hi);
+    if (std::fabs(step) < 1e-14) break;
+  }
+  return x;
 }
+
+double RadiativeCooling::temperature(double u) const { return std::pow(10.0, log10_temperature(u)); }
 
 double RadiativeCooling::du_dt(double rho, double u) const {
   if (u <= u_floor_) return 0.0;
-  const double log_t = std::log10(temperature(u));
+  const double log_t = log10_temperature(u);
   const double rho_cgs = rho * units_.density_cgs();
   const double n_h = x_h_ * rho_cgs / m_proton;
   const double n_e = table_.electrons_per_h(log_t) * n_h;

@@ -16,6 +16,7 @@ class RadiativeCooling {
   // Temperature (K) of gas with specific energy u, with the table's mean particle mass at
   // that temperature (u(T) is monotonic, so it is solved by bisection, not iterated).
   double temperature(double u) const;
+  double log10_temperature(double u) const;
   // Specific energy of gas at temperature T (K).
   double energy_at(double temperature_k) const;
   // The cooling term du/dt (<= 0) at density rho and specific energy u.
