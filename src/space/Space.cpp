@@ -223,14 +223,14 @@ Vec3 octant_corner(const Vec3& lo, const Vec3& half, int o) {
 
 // Orders the particles of a leaf as the octree below it would (without making cells), so that
 // any run of consecutive particles is spatially compact: the SPH loops work in small groups.
-void order_leaf(const GasParticles& gas, std::size_t first, std::size_t count, const Vec3& lo, const Vec3& width,
+void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t count, const Vec3& lo, const Vec3& width,
                 int depth, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch) {
   if (count <= 4 || depth >= kMaxDepth) return;
   const Vec3 half = width * 0.5;
-  const std::array<std::size_t, 9> start = partition_octants(gas.x, first, count, lo + half, order, scratch);
+  const std::array<std::size_t, 9> start = partition_octants(pos, first, count, lo + half, order, scratch);
   for (int o = 0; o < 8; ++o)
     if (start[o + 1] > start[o])
-      order_leaf(gas, first + start[o], start[o + 1] - start[o], octant_corner(lo, half, o), half, depth + 1,
+      order_leaf(pos, first + start[o], start[o + 1] - start[o], octant_corner(lo, half, o), half, depth + 1,
                  order, scratch);
 }
 
@@ -245,7 +245,8 @@ void Space::split(int c, SortState& s) {
     for (int k = 0; k < 3; ++k) must_split = must_split || cell.width[k] > 0.25 * size_[k];
   }
   if (!must_split || cell.depth >= kMaxDepth) {
-    order_leaf(s.gas, cell.first, cell.count, cell.lo, cell.width, cell.depth, s.order, s.scratch);
+    order_leaf(s.gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, s.order, s.scratch);
+    order_leaf(s.dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, s.dm_order, s.dm_scratch);
     return;
   }
 
