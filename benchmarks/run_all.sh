@@ -6,9 +6,16 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 bin="$root/build/benchmarks/fountain_run_bench"
 out="$root/benchmarks/results"
 mkdir -p "$out"
-for problem in ${PROBLEMS:-sod sedov}; do
+for problem in $(echo "${PROBLEMS:-sod sedov}" | tr ' ' '\n' | grep -v sphere); do
   for t in 1 2; do
     "$bin" "$problem" --threads "$t" --json "$out/${problem}_t$t.json"
   done
 done
+# The paper's rotating sphere, 8000 particles per species, MSPH, cooling and gravity, for
+# t = 2e-5 (20 Myr) from the start.
+if [ -z "${PROBLEMS:-}" ] || echo "$PROBLEMS" | grep -q sphere; then
+  for t in 1 2; do
+    "$root/build/benchmarks/fountain_sphere_bench" -n 8000 --threads "$t" --t-end 2e-5 --json "$out/sphere_t$t.json"
+  done
+fi
 "$root/build/benchmarks/fountain_bench_kernels" --benchmark_format=json > "$out/kernels.json"
