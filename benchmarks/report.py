@@ -9,9 +9,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 
 def main():
     runs = []
+    spheres = []
     for path in sorted(glob.glob(os.path.join(HERE, "results", "*_t*.json"))):
         with open(path) as f:
-            runs.append(json.load(f))
+            r = json.load(f)
+        (spheres if r["problem"] == "rotating_sphere" else runs).append(r)
     print("| problem | particles | threads | wall (s) | steps | full steps | full step (us/particle) "
           "| updates/s | in tasks | peak RSS (B/particle) | accuracy |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
@@ -31,6 +33,22 @@ def main():
             one, two = by[(p, 1)], by[(p, 2)]
             print(f"\n{p}: parallel efficiency on 2 threads {one['wall_s'] / (2 * two['wall_s']):.0%} (wall), "
                   f"{one['full_step_us_per_particle'] / (2 * two['full_step_us_per_particle']):.0%} (full steps)")
+
+    if spheres:
+        print("\n| rotating sphere | particles | threads | wall (s) | steps | updates/s | hydro | gravity | cooling "
+              "| integration | outside tasks | in tasks |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in spheres:
+            c = r["task_seconds_by_category"]
+            total = sum(c.values())
+            share = {k: f"{100 * v / total:.0f}%" for k, v in c.items()}
+            print(f"| {r['particles_per_species']} per species | {r['particles']:,} | {r['threads']} | {r['wall_s']:.1f} "
+                  f"| {r['steps']} | {r['updates_per_s']:.3g} | {share.get('hydro', '-')} | {share.get('gravity', '-')} "
+                  f"| {share.get('cooling', '-')} | {share.get('integration', '-')} | {share.get('outside_tasks', '-')} "
+                  f"| {100 * r['tasks_busy_share_of_thread_time']:.1f}% |")
+        by_t = {r["threads"]: r for r in spheres}
+        if 1 in by_t and 2 in by_t:
+            print(f"\nrotating sphere: parallel efficiency on 2 threads {by_t[1]['wall_s'] / (2 * by_t[2]['wall_s']):.0%}")
 
 
 if __name__ == "__main__":
