@@ -1,6 +1,8 @@
 // Tests of the HDF5 initial-conditions reader/writer and of the snapshot writer.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+
+#include "TempDirTest.hpp"
 #include <hdf5.h>
 #include <unistd.h>
 
@@ -34,23 +36,7 @@ using fountain::io::hdf5::File;
 namespace {
 
 // Every test gets its own empty folder, removed afterwards.
-class IoTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("fountain_test_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  std::string file(const std::string& name) const { return (dir_ / name).string(); }
-
-  fs::path dir_;
-};
+class IoTest : public fountain::testing::TempDirTest {};
 
 GasParticles make_gas(std::size_t n, std::uint64_t first_id = 1) {
   GasParticles gas;

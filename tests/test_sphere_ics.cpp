@@ -1,6 +1,8 @@
 // Tests of the rotating collapsing sphere initial conditions (Navarro & White 1993 set-up,
 // REFERENCES.md section 2) and of writing them, with dark matter, as a GADGET HDF5 file.
 #include <gtest/gtest.h>
+
+#include "TempDirTest.hpp"
 #include <unistd.h>
 
 #include <algorithm>
@@ -154,22 +156,7 @@ double cumulative_slope(std::vector<Vec3> x, double m, double r_lo, double r_hi)
   return (n * sxy - sx * sy) / (n * sxx - sx * sx);
 }
 
-class SphereIcsFile : public ::testing::Test {
- protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("fountain_test_sphere_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(dir_, ec);
-  }
-  std::string file(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
+class SphereIcsFile : public fountain::testing::TempDirTest {};
 
 }  // namespace
 

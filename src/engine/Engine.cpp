@@ -101,7 +101,6 @@ void Engine::build_graph() {
   for (int c : leaves) npairs += space_.neighbours(c).size();
   const bool gravity = config_.gravity.enabled;
   graph_.reserve(9 * leaves.size() + 2 * npairs + 1, 2 * npairs + 3 * leaves.size());
-  std::vector<int> walks;
   // One tree per step, from every cell's drifted particles; each cell's walk reads it.
   gravity_tree_task_ = gravity ? graph_.add(types_.gravity_tree, -1, -1, -1) : -1;
   dpairs.reserve(npairs);
