@@ -60,6 +60,7 @@ void for_each_field(Gas& g, Fn&& fn) {
   fn("inv_rho_2ma", g.inv_rho_2ma);
   fn("balsara", g.balsara);
   fn("du_dt", g.du_dt);
+  fn("du_dt_cool", g.du_dt_cool);
   fn("potential", g.potential);
   fn("x", g.x);
   fn("v_full", g.v_full);
@@ -150,8 +151,8 @@ Particles read_particles(const hdf5::File& f, const std::string& path, const std
 }
 
 std::string scalars_checksum_text(const RestartState& s) {
-  return fmt::format("{} {} {} {} {} {}", s.ti_current, s.steps, s.snapshots_written, s.next_output, s.gas.size(),
-                     s.dm.size());
+  return fmt::format("{} {} {} {} {} {} {:a}", s.ti_current, s.steps, s.snapshots_written, s.next_output, s.gas.size(),
+                     s.dm.size(), s.radiated_energy);
 }
 
 std::string checksum(const RestartState& s) {
@@ -174,6 +175,7 @@ void write_restart(const std::string& path, const RestartState& s) {
     f.write_attribute("/Restart", "Steps", static_cast<std::int64_t>(s.steps));
     f.write_attribute("/Restart", "SnapshotsWritten", s.snapshots_written);
     f.write_attribute("/Restart", "NextOutput", s.next_output);
+    f.write_attribute("/Restart", "RadiatedEnergy", s.radiated_energy);
     f.write_attribute("/Restart", "GasParticles", static_cast<std::int64_t>(s.gas.size()));
     f.write_attribute("/Restart", "DarkMatterParticles", static_cast<std::int64_t>(s.dm.size()));
     f.write_string_dataset("/Restart/Parameters", s.parameters_yaml.empty() ? std::string("{}") : s.parameters_yaml);
@@ -193,7 +195,7 @@ RestartState read_restart(const std::string& path) {
   if (version != kRestartFormatVersion)
     throw InputError(fmt::format("{}: restart format version {} cannot be read by this build (it reads version {})",
                                  path, version, kRestartFormatVersion));
-  for (const char* name : {"TiCurrent", "Steps", "SnapshotsWritten", "NextOutput", "GasParticles",
+  for (const char* name : {"TiCurrent", "Steps", "SnapshotsWritten", "NextOutput", "RadiatedEnergy", "GasParticles",
                            "DarkMatterParticles", "Checksum"})
     if (!f.has_attribute("/Restart", name))
       throw InputError(fmt::format("{}: /Restart has no attribute {} (restart file incomplete)", path, name));
@@ -202,6 +204,7 @@ RestartState read_restart(const std::string& path) {
   s.steps = f.read_attribute_int64("/Restart", "Steps").at(0);
   s.snapshots_written = static_cast<int>(f.read_attribute_double("/Restart", "SnapshotsWritten"));
   s.next_output = static_cast<int>(f.read_attribute_double("/Restart", "NextOutput"));
+  s.radiated_energy = f.read_attribute_double("/Restart", "RadiatedEnergy");
   s.parameters_yaml = f.read_string("/Restart/Parameters");
   if (s.parameters_yaml == "{}") s.parameters_yaml.clear();
   const std::uint64_t n_gas = f.read_attribute_uint64("/Restart", "GasParticles").at(0);

@@ -9,7 +9,7 @@
 namespace fountain::io {
 
 // 3: dark matter (/DarkMatter), gas a_grav and potential, particle counts in /Restart.
-inline constexpr int kRestartFormatVersion = 4;
+inline constexpr int kRestartFormatVersion = 5;
 
 struct RestartState {
   GasParticles gas;
@@ -18,6 +18,7 @@ struct RestartState {
   long long steps = 0;
   int snapshots_written = 0;
   int next_output = 1;
+  double radiated_energy = 0.0;  // by cooling, since the start
   std::string parameters_yaml;  // the parameters the run was started with
 };
 

@@ -12,7 +12,7 @@ namespace fountain::io {
 namespace {
 constexpr const char* kColumns =
     "time step mass_gas mass_dark_matter mass_hot mass_warm mass_cold mass_unbound "
-    "thermal_energy kinetic_energy potential_energy total_energy "
+    "thermal_energy kinetic_energy potential_energy total_energy radiated_energy "
     "momentum_x momentum_y momentum_z angular_momentum_x angular_momentum_y angular_momentum_z";
 }
 
@@ -23,7 +23,8 @@ StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(pat
     fmt::print(file_,
                "# Fountain statistics: internal units (time, mass, energy = mass velocity^2, momentum = mass "
                "velocity). Phases as in Marri & White (2003) section 3.2: hot T > 2 T*, cold T <= 2 T* and "
-               "rho > 0.1 rho*, warm otherwise; unbound: v^2/2 + potential > 0.\n");
+               "rho > 0.1 rho*, warm otherwise; unbound: v^2/2 + potential > 0; total_energy + "
+               "radiated_energy (by cooling, since the start) is conserved.\n");
     fmt::print(file_, "# {}\n", kColumns);
     std::fflush(file_);
   }
@@ -36,7 +37,7 @@ StatisticsFile::~StatisticsFile() {
 void StatisticsFile::write(double time, long long step, const analysis::Diagnostics& d) {
   std::string line = fmt::format("{:.10e} {}", time, step);
   for (double x : {d.mass_gas, d.mass_dark_matter, d.mass_hot, d.mass_warm, d.mass_cold, d.mass_unbound, d.thermal,
-                   d.kinetic, d.potential, d.total_energy(), d.momentum.x, d.momentum.y, d.momentum.z,
+                   d.kinetic, d.potential, d.total_energy(), d.radiated, d.momentum.x, d.momentum.y, d.momentum.z,
                    d.angular_momentum.x, d.angular_momentum.y, d.angular_momentum.z})
     line += fmt::format(" {:.10e}", x);
   line += '\n';

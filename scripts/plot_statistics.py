@@ -50,8 +50,9 @@ def main():
             ax[0, 0].plot(t, s[f"mass_{name}"] / gas, ls, color=colour, lw=lw, label=f"{name}, {label}")
         ax[0, 1].plot(t, s["thermal_energy"], ls, lw=lw, label=label)
         ax[0, 2].plot(t, s["mass_unbound"] / gas, ls, lw=lw, label=label)
-        e0 = s["total_energy"][0]
-        ax[1, 0].plot(t, (s["total_energy"] - e0) / abs(e0), ls, lw=lw, label=label)
+        # Radiated energy (column added later; older files lack it) closes the budget.
+        e = s["total_energy"] + s.get("radiated_energy", 0.0)
+        ax[1, 0].plot(t, (e - e[0]) / abs(e[0]), ls, lw=lw, label=label)
         scale = np.sqrt(2.0 * s["kinetic_energy"] * (s["mass_gas"] + s["mass_dark_matter"]))
         p = np.sqrt(s["momentum_x"] ** 2 + s["momentum_y"] ** 2 + s["momentum_z"] ** 2)
         ax[1, 1].semilogy(t, np.maximum(p / np.maximum(scale, 1e-300), 1e-20), ls, lw=lw, label=label)
@@ -62,7 +63,7 @@ def main():
     ax[0, 0].legend(fontsize=7, ncol=2)
     ax[0, 1].set_ylabel("total thermal energy (internal units)")
     ax[0, 2].set_ylabel("unbound gas fraction")
-    ax[1, 0].set_ylabel("(E - E0) / |E0| (includes radiated energy)")
+    ax[1, 0].set_ylabel("(E + E_radiated) / |E0| - 1")
     ax[1, 1].set_ylabel("|total momentum| / sqrt(2 K M)")
     ax[1, 2].set_ylabel("L_z / L_z(0) - 1")
     for x in ax.flat:

@@ -23,6 +23,7 @@ struct Diagnostics {
   double mass_hot = 0.0, mass_warm = 0.0, mass_cold = 0.0;
   double mass_unbound = 0.0;         // gas with v^2/2 + potential > 0
   double thermal = 0.0, kinetic = 0.0, potential = 0.0;
+  double radiated = 0.0;             // by cooling since the start: total_energy + radiated is conserved
   Vec3 momentum, angular_momentum;   // about the origin
   double total_energy() const { return thermal + kinetic + potential; }
 };

@@ -116,6 +116,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   engine.set_record_timeline(dump_timeline || config.output.dump_task_graph);
   if (restart) {
     engine.restore(state.ti_current, state.steps);
+    engine.set_radiated_energy(state.radiated_energy);
     if (!quiet) fmt::print(stderr, "restarted from {} at t = {:.6g}, step {}\n", restart_path(params), engine.time(),
                            engine.steps());
   } else {
@@ -168,6 +169,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     out.steps = engine.steps();
     out.snapshots_written = summary.snapshots;
     out.next_output = next_output;
+    out.radiated_energy = engine.radiated_energy();
     out.parameters_yaml = config.parameters_yaml;
     io::write_restart(restart_path(params), out);
     last_restart = std::chrono::steady_clock::now();
@@ -185,8 +187,9 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     statistics = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", restart);
   const analysis::PhaseThresholds phases = analysis::PhaseThresholds::paper(config.units);
   auto write_statistics = [&] {
-    statistics->write(engine.time(), engine.steps(),
-                      analysis::measure(engine.gas(), engine.dark_matter(), temperature, phases));
+    analysis::Diagnostics d = analysis::measure(engine.gas(), engine.dark_matter(), temperature, phases);
+    d.radiated = engine.radiated_energy();
+    statistics->write(engine.time(), engine.steps(), d);
   };
   if (statistics && !restart) write_statistics();
 

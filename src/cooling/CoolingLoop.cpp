@@ -20,6 +20,8 @@ void cool_cell(StepContext& ctx, int c) {
     const double du_hydro = std::max(gas.du_dt[i], -0.5 * u_old / dt);
     const double u_new = cooling.implicit_step(gas.rho[i], u_old, du_hydro, dt);
     gas.du_dt[i] = (u_new - u_old) / dt;
+    // The kicks count what this part of the rate takes out (docs/design.md).
+    gas.du_dt_cool[i] = (u_new - (u_old + du_hydro * dt)) / dt;
   }
 }
 

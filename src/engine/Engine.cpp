@@ -242,6 +242,7 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
   };
   executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr, &step_tasks_);
+  collect_radiated();
   if (info) {
     info->tasks_wall_s += 1e-9 * static_cast<double>(executor_.last_wall_ns());
     info->tasks_busy_s += 1e-9 * static_cast<double>(executor_.last_busy_ns());
@@ -297,6 +298,15 @@ void Engine::wake_requested() {
   StepContext& ctx = *ctx_;
   const auto& leaves = space_.leaves();
   executor_.for_each(leaves.size(), [&](std::size_t l) { integration::wake(ctx, leaves[l]); });
+  collect_radiated();
+}
+
+void Engine::collect_radiated() {
+  if (!cooling_) return;
+  for (int c : space_.leaves()) {  // in a fixed order, so the total is reproducible
+    radiated_ += space_.cell(c).radiated;
+    space_.cell(c).radiated = 0.0;
+  }
 }
 
 void Engine::converge_density(Phase phase) {

@@ -77,6 +77,10 @@ class Engine {
   const tasks::TaskGraph& graph() const { return graph_; }
   const std::vector<tasks::TaskRecord>& last_records() const { return records_; }
   int threads() const { return executor_.threads(); }
+  // Energy radiated by cooling since the start of the run (internal units), for energy
+  // conservation checks; set_radiated_energy continues it after a restart.
+  double radiated_energy() const { return radiated_; }
+  void set_radiated_energy(double e) { radiated_ = e; }
   // The run's radiative cooling, or null when it is off.
   const cooling::RadiativeCooling* cooling() const { return cooling_.get(); }
   Totals totals() const;
@@ -87,6 +91,7 @@ class Engine {
   void rebuild();
   void converge_density(Phase phase);
   void wake_requested();
+  void collect_radiated();  // adds the cells' radiated energy of this step to the total
   void build_graph();
   void prepare_step(IntegerTime ti);
   std::size_t activate(Phase phase);
@@ -109,6 +114,7 @@ class Engine {
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
   int gravity_tree_task_ = -1;
+  double radiated_ = 0.0;
   IntegerTime ti_current_ = 0;
   long long steps_ = 0;
   bool rebuild_pending_ = true;

@@ -48,6 +48,7 @@ struct GasParticles {
   // Force-loop results.
   std::vector<Vec3> a_hydro;
   std::vector<double> du_dt;
+  std::vector<double> du_dt_cool;     // the part of du_dt that is radiative cooling (<= 0)
 
   // Gravity (zero when gravity is off): acceleration and specific potential at the last
   // force computation.
@@ -69,7 +70,7 @@ struct GasParticles {
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
     soundspeed.resize(n); p_over_rho_a.resize(n); inv_rho_2ma.resize(n); balsara.resize(n);
-    a_hydro.resize(n); du_dt.resize(n); a_grav.resize(n); potential.resize(n);
+    a_hydro.resize(n); du_dt.resize(n); du_dt_cool.resize(n); a_grav.resize(n); potential.resize(n);
     time_bin.resize(n);
     ti_begin.resize(n);
     courant_bin.resize(n);

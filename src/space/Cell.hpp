@@ -36,6 +36,9 @@ struct Cell {
   Vec3 active_lo, active_hi;
   double active_h_max = -1.0;  // negative: no active particle
 
+  // Energy radiated by its particles' kicks this step (gathered by the engine after each step).
+  double radiated = 0.0;
+
   Vec3 centre() const { return lo + width * 0.5; }
 };
 

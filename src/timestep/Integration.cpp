@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "cooling/RadiativeCooling.hpp"
 #include "core/Error.hpp"
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
@@ -76,14 +77,26 @@ void drift(StepContext& ctx, int c) {
 
 void kick_close(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
-  const Cell& cell = ctx.space.cell(c);
+  Cell& cell = ctx.space.cell(c);
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
     // Half of the step that ends now (shorter than its bin's if the particle was woken).
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
       gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
-      gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], dt);
+      // du_dt is now the hydro rate at the step's end (the force loop just reset it); the
+      // cooling part of the step being closed was set at its start and applies to this half too.
+      const double u_half = gas.u_full[i];
+      double u = u_half + gas.du_dt[i] * dt;
+      if (u < 0.5 * u_half) u = 0.5 * u_half;  // hydro alone never halves u in one kick (GADGET)
+      if (ctx.cooling) {
+        u += gas.du_dt_cool[i] * dt;
+        cell.radiated -= gas.mass[i] * gas.du_dt_cool[i] * dt;
+        // A safety net only: the implicit solve ends the step near its solution (> the 1e4 K
+        // energy); a hydro rate that changed sign during the step could otherwise overshoot.
+        u = std::max(u, 0.5 * std::min(u_half, ctx.cooling->floor_energy()));
+      }
+      gas.u_full[i] = u;
     }
     gas.v[i] = gas.v_full[i];
     gas.u[i] = gas.u_full[i];
@@ -162,6 +175,7 @@ void kick_open(StepContext& ctx, int c) {
       const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
       gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], dt);
+      cell.radiated -= gas.mass[i] * gas.du_dt_cool[i] * dt;
     }
     v_max = std::max(v_max, norm(gas.v_full[i]));
   }
@@ -187,6 +201,7 @@ void wake(StepContext& ctx, int c) {
     const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
     gas.v_full[i] -= (gas.a_hydro[i] + gas.a_grav[i]) * undo;
     gas.u_full[i] -= gas.du_dt[i] * undo;
+    cell.radiated += gas.mass[i] * gas.du_dt_cool[i] * undo;
     gas.time_bin[i] = static_cast<TimeBin>(w);
     cell.ti_end_min = std::min(cell.ti_end_min, new_end);
   }
