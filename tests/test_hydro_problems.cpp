@@ -10,6 +10,7 @@
 
 #include "analysis/HydroReference.hpp"
 #include "engine/Engine.hpp"
+#include "ics/RotatingSphere.hpp"
 #include "ics/TestProblems.hpp"
 
 namespace fountain {
@@ -149,6 +150,41 @@ TEST(EvrardCollapse, EnergyAndMomentumConserved) {
   // The tree's forces are not exactly antisymmetric (docs/gravity.md): momentum stays at
   // the tree's error level, far below the system's sum of |m v| (~0.5 at the peak).
   EXPECT_LT(p_max, 1e-3);
+}
+
+// The paper's sphere with gravity and cooling over its first 30 Myr, before the collapse
+// heats anything: the gas only cools, so the thermal energy lost must be the energy the
+// cooling radiated, and the total plus the radiated energy must stay constant. (A closing
+// half-kick that dropped the cooling rate once left the gas with half the cooling.)
+TEST(CoolingSphere, RadiatedEnergyClosesTheBudget) {
+  ics::RotatingSphereParams sp;
+  sp.particles_per_species = 500;
+  ics::RotatingSphereIC ic = ics::rotating_sphere(sp);
+  RunConfig c;
+  c.t_end = 3.0e-5;
+  c.threads = 2;
+  c.integration.dt_min = 1e-12;
+  c.integration.dt_max = 1e-6;
+  c.gravity.enabled = true;
+  c.gravity.G = Units{}.gravitational_constant();
+  c.gravity.softening_dark_matter = 0.002;
+  c.gravity.softening_gas = 0.001;
+  c.cooling.enabled = true;
+  c.cooling.table_directory = std::string(FOUNTAIN_SOURCE_DIR) + "/data/cooling/sutherland_dopita_1993";
+  Engine e(c, std::move(ic.gas), std::move(ic.dm));
+  e.initialise();
+  const Totals start = e.totals();
+  const double radiated_start = e.radiated_energy();
+  while (!e.finished()) e.step();
+  e.drift_all();
+  const Totals end = e.totals();
+  const double radiated = e.radiated_energy() - radiated_start;
+  const double lost = start.thermal - end.thermal;
+  std::printf("Cooling sphere: thermal %.4e -> %.4e, radiated %.4e, (E + radiated) change %.2e of |E|\n", start.thermal,
+              end.thermal, radiated, (end.energy() + radiated - start.energy()) / std::fabs(start.energy()));
+  EXPECT_GT(lost, 0.3 * start.thermal);  // the gas does cool a lot in 30 Myr
+  EXPECT_NEAR(radiated, lost, 0.05 * lost);
+  EXPECT_LT(std::fabs(end.energy() + radiated - start.energy()), 1e-3 * std::fabs(start.energy()));
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 # species with dark-matter softenings of 2, 1.5 and 1 kpc/h (gas: half), to t = 1.2 Gyr.
 #
 #   sh examples/rotating_sphere/run_convergence.sh            # all six runs, then the plots
-#   SIZES="2000" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
+#   SIZES="2000" SCHEMES="msph" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
 #
 # Runs go to examples/rotating_sphere/output/<N>_<scheme>/; a finished run is not redone.
 # Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
@@ -27,7 +27,7 @@ for n in ${SIZES:-2000 4000 8000}; do
   esac
   ic="$out/sphere_$n.hdf5"
   [ -f "$ic" ] || "$bin" ic sphere -n "$n" -o "$ic"
-  for scheme in sph msph; do
+  for scheme in ${SCHEMES:-sph msph}; do
     dir="$out/${n}_$scheme"
     [ -f "$dir/done" ] && continue
     mkdir -p "$dir"
