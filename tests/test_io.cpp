@@ -149,6 +149,12 @@ std::string error_of(Fn fn) {
   return "";
 }
 
+// Writes `h` to `path` by hand and returns the InputError that reading it as ICs gives.
+std::string read_error(const std::string& path, const HandWritten& h) {
+  write_by_hand(path, h);
+  return error_of([&] { fountain::io::read_initial_conditions(path); });
+}
+
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 fountain::io::SnapshotInfo snapshot_info() {
@@ -236,8 +242,7 @@ TEST_F(IoTest, MissingInternalEnergyIsAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.write_energy = false;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType0/InternalEnergy")) << msg;
   EXPECT_TRUE(contains(msg, "not found")) << msg;
 }
@@ -246,8 +251,7 @@ TEST_F(IoTest, MissingMassesWithZeroMassTableIsAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.write_masses = false;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/Masses")) << msg;
   EXPECT_TRUE(contains(msg, "MassTable")) << msg;
 }
@@ -271,8 +275,7 @@ TEST_F(IoTest, DatasetLengthDisagreeingWithHeaderIsAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.header_count = 11;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/")) << msg;
   EXPECT_TRUE(contains(msg, "10")) << msg;
   EXPECT_TRUE(contains(msg, "11")) << msg;
@@ -293,8 +296,7 @@ TEST_F(IoTest, NanEnergyIsAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.u[3] = std::numeric_limits<double>::quiet_NaN();
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/InternalEnergy")) << msg;
   EXPECT_TRUE(contains(msg, "particle ID " + std::to_string(h.ids[3]))) << msg;
 }
@@ -303,8 +305,7 @@ TEST_F(IoTest, NegativeEnergyNamesTheParticle) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.u[6] = -2.0;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/InternalEnergy")) << msg;
   EXPECT_TRUE(contains(msg, "particle ID " + std::to_string(h.ids[6]))) << msg;
 }
@@ -314,8 +315,7 @@ TEST_F(IoTest, NegativeMassNamesTheParticle) {
   HandWritten h = hand_written(10);
   h.ids[5] = 17;
   h.mass[5] = -1.0;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType0/Masses: particle ID 17 has mass -1 (must be positive)")) << msg;
 }
 
@@ -323,8 +323,7 @@ TEST_F(IoTest, NonFiniteCoordinateNamesTheParticle) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.x[2].y = std::numeric_limits<double>::infinity();
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/Coordinates: particle ID " + std::to_string(h.ids[2]))) << msg;
 }
 
@@ -332,8 +331,7 @@ TEST_F(IoTest, DuplicateIdsAreAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10);
   h.ids[7] = h.ids[2];
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/ParticleIDs")) << msg;
   EXPECT_TRUE(contains(msg, "particle ID " + std::to_string(h.ids[2]))) << msg;
 }
@@ -453,8 +451,7 @@ TEST_F(IoTest, DarkMatterMissingMassesWithZeroMassTableIsAnError) {
   HandWritten h = hand_written(10, 6);
   h.write_dm_masses = false;
   h.mass_table = {0.5, 0, 0, 0, 0, 0};  // gas masses in the table, none for the dark matter
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType1/Masses: dataset not found and /Header/MassTable[1] is 0")) << msg;
   EXPECT_TRUE(contains(msg, "dark matter masses are missing")) << msg;
 }
@@ -463,8 +460,7 @@ TEST_F(IoTest, DarkMatterNanCoordinateNamesTheParticle) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10, 6);
   h.dm_x[4].z = std::numeric_limits<double>::quiet_NaN();
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType1/Coordinates: particle ID " + std::to_string(h.dm_ids[4]) +
                                 " has non-finite coordinates"))
       << msg;
@@ -474,8 +470,7 @@ TEST_F(IoTest, DarkMatterNegativeMassNamesTheParticle) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10, 6);
   h.dm_mass[2] = -4.0;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType1/Masses: particle ID " + std::to_string(h.dm_ids[2]) +
                                 " has mass -4 (must be positive)"))
       << msg;
@@ -485,16 +480,14 @@ TEST_F(IoTest, IdSharedByGasAndDarkMatterIsAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10, 6);
   h.dm_ids[3] = h.ids[8];
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType1/ParticleIDs: particle ID " + std::to_string(h.ids[8]))) << msg;
   EXPECT_TRUE(contains(msg, "unique across gas and dark matter")) << msg;
 
   // Twice within the dark matter.
   h = hand_written(10, 6);
   h.dm_ids[5] = h.dm_ids[1];
-  write_by_hand(path, h);
-  const std::string twice = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string twice = read_error(path, h);
   EXPECT_TRUE(contains(twice, "/PartType1/ParticleIDs: particle ID " + std::to_string(h.dm_ids[1]))) << twice;
 }
 
@@ -502,16 +495,14 @@ TEST_F(IoTest, DarkMatterCountDisagreeingWithHeaderIsAnError) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10, 6);
   h.dm_header_count = 7;
-  write_by_hand(path, h);
-  const std::string msg = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, path + ": /PartType1/ParticleIDs: has 6 entries but /Header/NumPart_ThisFile[1] "
                                    "announces 7 dark matter particles"))
       << msg;
 
   h = hand_written(10, 6);
   h.write_dm_group = false;
-  write_by_hand(path, h);
-  const std::string missing = error_of([&] { fountain::io::read_initial_conditions(path); });
+  const std::string missing = read_error(path, h);
   EXPECT_TRUE(contains(missing, path + ": /PartType1: group not found")) << missing;
 }
 
