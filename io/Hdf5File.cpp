@@ -562,19 +562,20 @@ void write_file_atomically(const std::string& path, const std::string& what,
 }
 
 void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time,
-                         std::uint64_t n_dm) {
+                         std::uint64_t n_dm, std::uint64_t n_stars) {
   file.create_group("/Header");
   const std::string h = "/Header";
   constexpr std::uint64_t two32 = std::uint64_t{1} << 32;
-  const std::uint64_t counts[2] = {n_gas, n_dm};
-  if (n_gas < two32 && n_dm < two32) {
-    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint32_t>{static_cast<std::uint32_t>(n_gas),
-                                                                           static_cast<std::uint32_t>(n_dm), 0, 0, 0, 0});
+  const std::uint64_t counts[6] = {n_gas, n_dm, 0, 0, n_stars, 0};
+  if (n_gas < two32 && n_dm < two32 && n_stars < two32) {
+    std::vector<std::uint32_t> c(6);
+    for (int t = 0; t < 6; ++t) c[static_cast<std::size_t>(t)] = static_cast<std::uint32_t>(counts[t]);
+    file.write_attribute(h, "NumPart_ThisFile", c);
   } else {
-    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>{n_gas, n_dm, 0, 0, 0, 0});
+    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>(counts, counts + 6));
   }
   std::vector<std::uint32_t> low(6, 0), high(6, 0);
-  for (int t = 0; t < 2; ++t) {
+  for (int t = 0; t < 6; ++t) {
     low[t] = static_cast<std::uint32_t>(counts[t] % two32);
     high[t] = static_cast<std::uint32_t>(counts[t] / two32);
   }

@@ -176,6 +176,6 @@ void write_file_atomically(const std::string& path, const std::string& what,
 // NumFilesPerSnapshot = 1, Dimension = 3, Omega0 = OmegaLambda = 0 and HubbleParam = 1
 // (non-cosmological), Flag_* = 0 except Flag_DoublePrecision = 1 (every dataset is float64).
 void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time,
-                         std::uint64_t n_dm = 0);
+                         std::uint64_t n_dm = 0, std::uint64_t n_stars = 0);
 
 }  // namespace fountain::io::hdf5

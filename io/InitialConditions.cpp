@@ -135,9 +135,9 @@ std::uint64_t particle_count(const File& file, const std::vector<std::uint64_t>&
 }
 
 // Reads the dark matter of /PartType1 (empty when NumPart_ThisFile[1] is 0).
-DarkMatterParticles read_dark_matter(const File& file, std::uint64_t n, const std::vector<double>* mass_table) {
+CollisionlessParticles read_dark_matter(const File& file, std::uint64_t n, const std::vector<double>* mass_table) {
   const Species& sp = kDarkMatterSpecies;
-  DarkMatterParticles dm;
+  CollisionlessParticles dm;
   if (n == 0) return dm;
   if (!file.exists(sp.group))
     file.fail(sp.group, fmt::format("group not found, but /Header/NumPart_ThisFile[1] announces {} dark matter "
@@ -158,7 +158,7 @@ DarkMatterParticles read_dark_matter(const File& file, std::uint64_t n, const st
 
 // IDs must be unique across the types: names the first dark matter particle whose ID a gas
 // particle also uses.
-void check_ids_across_species(const File& file, const GasParticles& gas, const DarkMatterParticles& dm) {
+void check_ids_across_species(const File& file, const GasParticles& gas, const CollisionlessParticles& dm) {
   if (dm.size() == 0) return;
   std::vector<std::uint64_t> gas_ids(gas.id);
   std::sort(gas_ids.begin(), gas_ids.end());
@@ -301,7 +301,7 @@ double common_mass(const std::vector<double>& mass) {
   return mass[0];
 }
 
-void write_ic_file(const std::string& path, const GasParticles& gas, const DarkMatterParticles* dm,
+void write_ic_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
                    const Vec3& box_size, bool periodic, double time) {
   const std::size_t n = gas.size();
   const std::string prefix = "cannot create initial conditions " + path + ": ";
@@ -374,7 +374,7 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
   write_ic_file(path, gas, nullptr, box_size, periodic, time);
 }
 
-void write_initial_conditions(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               const Vec3& box_size, bool periodic, double time) {
   write_ic_file(path, gas, &dm, box_size, periodic, time);
 }

@@ -3,14 +3,14 @@
 #include <string>
 
 #include "core/Vec3.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
 
 struct InitialConditions {
   GasParticles gas;          // id, mass, x, v_full (= v), u_full (= u), h (0 where absent)
-  DarkMatterParticles dm;    // id, mass, x, v_full (empty when the file has none)
+  CollisionlessParticles dm;    // id, mass, x, v_full (empty when the file has none)
   Vec3 box_size;             // /Header/BoxSize (scalar or 3-vector in the file)
   double time = 0.0;         // /Header/Time
   bool has_smoothing_length = false;
@@ -35,7 +35,7 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
 // types, and MassTable holds each type's particle mass where all its particles share one
 // (0 otherwise; the Masses datasets are written either way). IDs must be unique across both
 // types. read_initial_conditions reads both back.
-void write_initial_conditions(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               const Vec3& box_size, bool periodic, double time = 0.0);
 
 }  // namespace fountain::io

@@ -46,6 +46,13 @@ void for_each_field(Gas& g, Fn&& fn) {
   fn("id", g.id);
   fn("ti_begin", g.ti_begin);
   fn("mass", g.mass);
+  fn("mass_initial", g.mass_initial);
+  fn("mass_stars_hidden", g.mass_stars_hidden);
+  fn("reservoir", g.reservoir);
+  fn("promoted", g.promoted);
+  fn("promotion_time", g.promotion_time);
+  fn("feedback_hot_energy", g.feedback_hot_energy);
+  fn("mass_formed", g.mass_formed);
   fn("u_full", g.u_full);
   fn("u", g.u);
   fn("h", g.h);
@@ -75,9 +82,12 @@ void for_each_field(Gas& g, Fn&& fn) {
 }
 
 template <class Dm, class Fn>
-  requires std::same_as<std::remove_const_t<Dm>, DarkMatterParticles>
+  requires std::same_as<std::remove_const_t<Dm>, CollisionlessParticles>
 void for_each_field(Dm& d, Fn&& fn) {
   fn("id", d.id);
+  fn("species", d.species);
+  fn("birth_time", d.birth_time);
+  fn("parent_id", d.parent_id);
   fn("ti_begin", d.ti_begin);
   fn("mass", d.mass);
   fn("potential", d.potential);
@@ -104,6 +114,14 @@ void write_field(hdf5::File& f, const std::string& name, const std::vector<std::
 void write_field(hdf5::File& f, const std::string& name, const std::vector<TimeBin>& v) {
   f.write_dataset(name, std::vector<std::int32_t>(v.begin(), v.end()));
 }
+void write_field(hdf5::File& f, const std::string& name, const std::vector<std::uint8_t>& v) {
+  f.write_dataset(name, std::vector<std::int32_t>(v.begin(), v.end()));
+}
+void write_field(hdf5::File& f, const std::string& name, const std::vector<Species>& v) {
+  std::vector<std::int32_t> raw(v.size());
+  for (std::size_t k = 0; k < v.size(); ++k) raw[k] = static_cast<std::int32_t>(v[k]);
+  f.write_dataset(name, raw);
+}
 
 void read_field(const hdf5::File& f, const std::string& name, std::vector<double>& v) { v = f.read_doubles(name); }
 void read_field(const hdf5::File& f, const std::string& name, std::vector<Vec3>& v) { v = f.read_vec3(name); }
@@ -119,6 +137,32 @@ void read_field(const hdf5::File& f, const std::string& name, std::vector<TimeBi
   const std::vector<double> raw = f.read_doubles(name);
   v.assign(raw.size(), 0);
   for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<TimeBin>(raw[k]);
+}
+void read_field(const hdf5::File& f, const std::string& name, std::vector<std::uint8_t>& v) {
+  const std::vector<double> raw = f.read_doubles(name);
+  v.assign(raw.size(), 0);
+  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<std::uint8_t>(raw[k]);
+}
+void read_field(const hdf5::File& f, const std::string& name, std::vector<Species>& v) {
+  const std::vector<double> raw = f.read_doubles(name);
+  v.assign(raw.size(), Species::DarkMatter);
+  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<Species>(static_cast<int>(raw[k]));
+}
+
+// The star formation tally as numbers, in a fixed order (stored as one attribute).
+std::vector<double> tally_values(const starformation::StarFormationTally& t) {
+  return {t.mass_formed, t.thermal_locked, t.energy_own, t.energy_reservoir, t.energy_hot, t.energy_released,
+          t.kinetic_to_heat, static_cast<double>(t.promotions), static_cast<double>(t.stars_spawned),
+          static_cast<double>(t.gas_dissolved), static_cast<double>(t.hot_without_neighbours)};
+}
+starformation::StarFormationTally tally_from(const std::vector<double>& v) {
+  starformation::StarFormationTally t;
+  if (v.size() != 11) return t;
+  t.mass_formed = v[0]; t.thermal_locked = v[1]; t.energy_own = v[2]; t.energy_reservoir = v[3];
+  t.energy_hot = v[4]; t.energy_released = v[5]; t.kinetic_to_heat = v[6];
+  t.promotions = static_cast<long long>(v[7]); t.stars_spawned = static_cast<long long>(v[8]);
+  t.gas_dissolved = static_cast<long long>(v[9]); t.hot_without_neighbours = static_cast<long long>(v[10]);
+  return t;
 }
 
 // ---- A whole particle type ---------------------------------------------------------------
@@ -151,8 +195,10 @@ Particles read_particles(const hdf5::File& f, const std::string& path, const std
 }
 
 std::string scalars_checksum_text(const RestartState& s) {
-  return fmt::format("{} {} {} {} {} {} {:a}", s.ti_current, s.steps, s.snapshots_written, s.next_output, s.gas.size(),
-                     s.dm.size(), s.radiated_energy);
+  std::string text = fmt::format("{} {} {} {} {} {} {:a} {}", s.ti_current, s.steps, s.snapshots_written,
+                                 s.next_output, s.gas.size(), s.dm.size(), s.radiated_energy, s.next_particle_id);
+  for (double v : tally_values(s.star_formation)) text += fmt::format(" {:a}", v);
+  return text;
 }
 
 std::string checksum(const RestartState& s) {
@@ -176,8 +222,10 @@ void write_restart(const std::string& path, const RestartState& s) {
     f.write_attribute("/Restart", "SnapshotsWritten", s.snapshots_written);
     f.write_attribute("/Restart", "NextOutput", s.next_output);
     f.write_attribute("/Restart", "RadiatedEnergy", s.radiated_energy);
+    f.write_attribute("/Restart", "NextParticleId", std::vector<std::uint64_t>{s.next_particle_id});
+    f.write_attribute("/Restart", "StarFormationTally", tally_values(s.star_formation));
     f.write_attribute("/Restart", "GasParticles", static_cast<std::int64_t>(s.gas.size()));
-    f.write_attribute("/Restart", "DarkMatterParticles", static_cast<std::int64_t>(s.dm.size()));
+    f.write_attribute("/Restart", "CollisionlessParticles", static_cast<std::int64_t>(s.dm.size()));
     f.write_string_dataset("/Restart/Parameters", s.parameters_yaml.empty() ? std::string("{}") : s.parameters_yaml);
     f.write_attribute("/Restart", "Checksum", checksum(s));
     write_particles(f, kGasGroup, s.gas);
@@ -195,8 +243,8 @@ RestartState read_restart(const std::string& path) {
   if (version != kRestartFormatVersion)
     throw InputError(fmt::format("{}: restart format version {} cannot be read by this build (it reads version {})",
                                  path, version, kRestartFormatVersion));
-  for (const char* name : {"TiCurrent", "Steps", "SnapshotsWritten", "NextOutput", "RadiatedEnergy", "GasParticles",
-                           "DarkMatterParticles", "Checksum"})
+  for (const char* name : {"TiCurrent", "Steps", "SnapshotsWritten", "NextOutput", "RadiatedEnergy", "NextParticleId",
+                           "StarFormationTally", "GasParticles", "CollisionlessParticles", "Checksum"})
     if (!f.has_attribute("/Restart", name))
       throw InputError(fmt::format("{}: /Restart has no attribute {} (restart file incomplete)", path, name));
   RestartState s;
@@ -205,12 +253,14 @@ RestartState read_restart(const std::string& path) {
   s.snapshots_written = static_cast<int>(f.read_attribute_double("/Restart", "SnapshotsWritten"));
   s.next_output = static_cast<int>(f.read_attribute_double("/Restart", "NextOutput"));
   s.radiated_energy = f.read_attribute_double("/Restart", "RadiatedEnergy");
+  s.next_particle_id = f.read_attribute_uint64("/Restart", "NextParticleId").at(0);
+  s.star_formation = tally_from(f.read_attribute_doubles("/Restart", "StarFormationTally"));
   s.parameters_yaml = f.read_string("/Restart/Parameters");
   if (s.parameters_yaml == "{}") s.parameters_yaml.clear();
   const std::uint64_t n_gas = f.read_attribute_uint64("/Restart", "GasParticles").at(0);
-  const std::uint64_t n_dm = f.read_attribute_uint64("/Restart", "DarkMatterParticles").at(0);
+  const std::uint64_t n_dm = f.read_attribute_uint64("/Restart", "CollisionlessParticles").at(0);
   s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
-  s.dm = read_particles<DarkMatterParticles>(f, path, kDarkMatterGroup, n_dm, "dark matter");
+  s.dm = read_particles<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, "collisionless");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");
   if (stored != checksum(s))
     throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));

@@ -198,10 +198,46 @@ constexpr Dimensions kNone{0, 0, 0, 0};
 constexpr Dimensions kAcceleration{0, 1, -2, 0};
 constexpr Dimensions kPotential{0, 2, -2, -1};  // SWIFT: potentials scale as 1/a
 
-void write_snapshot_file(const std::string& path, const GasParticles& gas, const DarkMatterParticles* dm,
+// The particles of one species as a GADGET PartType group.
+void write_collisionless(File& file, const std::string& group, const CollisionlessParticles& p, Species species,
+                         const Units& units) {
+  std::vector<std::size_t> pick;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (p.species[i] == species) pick.push_back(i);
+  auto subset = [&](const auto& field) {
+    std::vector<typename std::decay_t<decltype(field)>::value_type> out;
+    out.reserve(pick.size());
+    for (std::size_t i : pick) out.push_back(field[i]);
+    return out;
+  };
+  auto ds = [&](const char* name) { return group + "/" + name; };
+  file.create_group(group);
+  file.write_dataset(ds("Coordinates"), subset(p.x));
+  write_dataset_units(file, ds("Coordinates"), units, kPosition, "Positions of the particles");
+  file.write_dataset(ds("Velocities"), subset(p.v));
+  write_dataset_units(file, ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
+  file.write_dataset(ds("Masses"), subset(p.mass));
+  write_dataset_units(file, ds("Masses"), units, kMass, "Masses of the particles");
+  file.write_dataset(ds("ParticleIDs"), subset(p.id));
+  write_dataset_units(file, ds("ParticleIDs"), units, kNone, "Unique IDs of the particles");
+  file.write_dataset(ds("Potential"), subset(p.potential));
+  write_dataset_units(file, ds("Potential"), units, kPotential,
+                      "Specific gravitational potentials of the particles at the last force computation");
+  file.write_dataset(ds("Acceleration"), subset(p.a_grav));
+  write_dataset_units(file, ds("Acceleration"), units, kAcceleration,
+                      "Gravitational accelerations of the particles at the last force computation");
+  if (species != Species::Star) return;
+  file.write_dataset(ds("BirthTime"), subset(p.birth_time));
+  write_dataset_units(file, ds("BirthTime"), units, {0, 0, 1, 0}, "Times the stars were spawned");
+  file.write_dataset(ds("ParentID"), subset(p.parent_id));
+  write_dataset_units(file, ds("ParentID"), units, kNone, "IDs of the gas particles that formed the stars");
+}
+
+void write_snapshot_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
                          const SnapshotInfo& info) {
   const std::size_t n = gas.size();
-  const std::size_t n_dm = dm != nullptr ? dm->size() : 0;
+  const std::size_t n_dm = dm != nullptr ? dm->count(Species::DarkMatter) : 0;
+  const std::size_t n_stars = dm != nullptr ? dm->count(Species::Star) : 0;
   try {
     check_size(gas.mass, n, "gas", "mass");
     check_size(gas.x, n, "gas", "x");
@@ -213,12 +249,16 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     check_size(gas.time_bin, n, "gas", "time_bin");
     check_size(gas.a_grav, n, "gas", "a_grav");
     check_size(gas.potential, n, "gas", "potential");
-    if (n_dm > 0) {
-      check_size(dm->mass, n_dm, "dark matter", "mass");
-      check_size(dm->x, n_dm, "dark matter", "x");
-      check_size(dm->v, n_dm, "dark matter", "v");
-      check_size(dm->a_grav, n_dm, "dark matter", "a_grav");
-      check_size(dm->potential, n_dm, "dark matter", "potential");
+    if (dm != nullptr) {
+      const std::size_t nc = dm->size();
+      check_size(dm->species, nc, "collisionless", "species");
+      check_size(dm->mass, nc, "collisionless", "mass");
+      check_size(dm->x, nc, "collisionless", "x");
+      check_size(dm->v, nc, "collisionless", "v");
+      check_size(dm->a_grav, nc, "collisionless", "a_grav");
+      check_size(dm->potential, nc, "collisionless", "potential");
+      check_size(dm->birth_time, nc, "collisionless", "birth_time");
+      check_size(dm->parent_id, nc, "collisionless", "parent_id");
     }
   } catch (const InputError& e) {
     throw InputError("cannot create snapshot " + path + ": " + e.what());
@@ -231,7 +271,7 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
 
     // /Header
     hdf5::write_gadget_header(file, n, cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z},
-                              info.time, n_dm);
+                              info.time, n_dm, n_stars);
     file.write_attribute("/Header", "Code", "Fountain");
     file.write_attribute("/Header", "Periodic", info.periodic ? 1 : 0);
     file.write_attribute("/Header", "Step", static_cast<std::int64_t>(info.step));
@@ -310,25 +350,24 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     write_dataset_units(file, ds("GravAcceleration"), units, kAcceleration,
                         "Gravitational accelerations of the particles at the last force computation "
                         "(0 without gravity)");
-    if (n_dm == 0) return;
+    if (info.star_formation) {
+      file.write_dataset(ds("InitialMasses"), gas.mass_initial);
+      write_dataset_units(file, ds("InitialMasses"), units, kMass, "Gas masses at the start (thresholds for spawning and dissolving)");
+      file.write_dataset(ds("HiddenStellarMasses"), gas.mass_stars_hidden);
+      write_dataset_units(file, ds("HiddenStellarMasses"), units, kMass,
+                          "Stellar mass formed by the particle and not yet spawned (counts for gravity and inertia only)");
+      file.write_dataset(ds("FeedbackReservoir"), gas.reservoir);
+      write_dataset_units(file, ds("FeedbackReservoir"), units, {1, 2, -2, 0},
+                          "Cold-phase feedback energy held until the particle can be promoted to the hot phase");
+      file.write_dataset(ds("Promoted"), std::vector<std::int32_t>(gas.promoted.begin(), gas.promoted.end()));
+      write_dataset_units(file, ds("Promoted"), units, kNone, "1 if the particle was promoted to the hot phase by feedback");
+      file.write_dataset(ds("PromotionTime"), gas.promotion_time);
+      write_dataset_units(file, ds("PromotionTime"), units, {0, 0, 1, 0}, "Time of the last promotion (-1: never)");
+    }
 
-    // /PartType1 (dark matter): MassTable[1] stays 0, the masses are per particle.
-    file.create_group("/PartType1");
-    auto dm_ds = [](const char* name) { return std::string("/PartType1/") + name; };
-    file.write_dataset(dm_ds("Coordinates"), dm->x);
-    write_dataset_units(file, dm_ds("Coordinates"), units, kPosition, "Positions of the particles");
-    file.write_dataset(dm_ds("Velocities"), dm->v);
-    write_dataset_units(file, dm_ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
-    file.write_dataset(dm_ds("Masses"), dm->mass);
-    write_dataset_units(file, dm_ds("Masses"), units, kMass, "Masses of the particles");
-    file.write_dataset(dm_ds("ParticleIDs"), dm->id);
-    write_dataset_units(file, dm_ds("ParticleIDs"), units, kNone, "Unique IDs of the particles");
-    file.write_dataset(dm_ds("Potential"), dm->potential);
-    write_dataset_units(file, dm_ds("Potential"), units, kPotential,
-                        "Specific gravitational potentials of the particles at the last force computation");
-    file.write_dataset(dm_ds("Acceleration"), dm->a_grav);
-    write_dataset_units(file, dm_ds("Acceleration"), units, kAcceleration,
-                        "Gravitational accelerations of the particles at the last force computation");
+    // /PartType1 (dark matter) and /PartType4 (stars): MassTable stays 0, masses per particle.
+    if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, units);
+    if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, units);
   });
 }
 
@@ -338,7 +377,7 @@ void write_snapshot(const std::string& path, const GasParticles& gas, const Snap
   write_snapshot_file(path, gas, nullptr, info);
 }
 
-void write_snapshot(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
+void write_snapshot(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                     const SnapshotInfo& info) {
   write_snapshot_file(path, gas, &dm, info);
 }

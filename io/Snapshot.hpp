@@ -5,7 +5,7 @@
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
@@ -22,6 +22,7 @@ struct SnapshotInfo {
   std::string build_options;
   // Temperature (K) of gas of specific energy u; when set, gas gets a Temperature dataset.
   std::function<double(double)> temperature;
+  bool star_formation = false;  // write the hybrid gas fields (hidden stars, reservoir, promotion)
 };
 
 // Writes `path` (to a temporary name first, renamed on success, so a full disk never
@@ -32,7 +33,7 @@ void write_snapshot(const std::string& path, const GasParticles& gas, const Snap
 // The same with dark matter: when `dm` is not empty it is written as /PartType1
 // (Coordinates, Velocities = v_full, Masses, ParticleIDs, Potential, Acceleration) and
 // counted in /Header (MassTable[1] = 0: the masses are per particle).
-void write_snapshot(const std::string& path, const GasParticles& gas, const DarkMatterParticles& dm,
+void write_snapshot(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                     const SnapshotInfo& info);
 
 }  // namespace fountain::io

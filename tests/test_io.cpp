@@ -27,7 +27,7 @@
 #include "params/ParameterFile.hpp"
 
 namespace fs = std::filesystem;
-using fountain::DarkMatterParticles;
+using fountain::CollisionlessParticles;
 using fountain::GasParticles;
 using fountain::InputError;
 using fountain::Vec3;
@@ -58,8 +58,8 @@ GasParticles make_gas(std::size_t n, std::uint64_t first_id = 1) {
   return gas;
 }
 
-DarkMatterParticles make_dm(std::size_t n, std::uint64_t first_id = 100000) {
-  DarkMatterParticles dm;
+CollisionlessParticles make_dm(std::size_t n, std::uint64_t first_id = 100000) {
+  CollisionlessParticles dm;
   dm.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const double s = static_cast<double>(i);
@@ -98,7 +98,7 @@ HandWritten hand_written(std::size_t n, std::size_t n_dm = 0) {
   h.v = gas.v_full;
   h.mass = gas.mass;
   h.u = gas.u_full;
-  const DarkMatterParticles dm = make_dm(n_dm);
+  const CollisionlessParticles dm = make_dm(n_dm);
   h.dm_ids = dm.id;
   h.dm_x = dm.x;
   h.dm_v = dm.v_full;
@@ -399,7 +399,7 @@ TEST_F(IoTest, ReadsFloat32DataAndUint32Ids) {
 
 TEST_F(IoTest, InitialConditionsRoundTripWithDarkMatter) {
   const GasParticles gas = make_gas(23, 1);
-  DarkMatterParticles dm = make_dm(31, 500);
+  CollisionlessParticles dm = make_dm(31, 500);
   const std::string path = file("ics_dm.hdf5");
   fountain::io::write_initial_conditions(path, gas, dm, {2.0, 2.0, 2.0}, true, 0.5);
 
@@ -429,7 +429,7 @@ TEST_F(IoTest, FileWithoutDarkMatterGivesNone) {
   fountain::io::write_initial_conditions(path, make_gas(5), {1, 1, 1}, false);
   EXPECT_EQ(fountain::io::read_initial_conditions(path).dm.size(), 0u);
   // An empty /PartType1 group announced as zero particles is no dark matter either.
-  fountain::io::write_initial_conditions(path, make_gas(5), DarkMatterParticles{}, {1, 1, 1}, false);
+  fountain::io::write_initial_conditions(path, make_gas(5), CollisionlessParticles{}, {1, 1, 1}, false);
   EXPECT_EQ(fountain::io::read_initial_conditions(path).dm.size(), 0u);
 }
 
@@ -594,7 +594,7 @@ TEST_F(IoTest, SnapshotOverwritesAnOldOne) {
 
 TEST_F(IoTest, SnapshotWithDarkMatter) {
   GasParticles gas = make_gas(20, 5);
-  DarkMatterParticles dm = make_dm(30, 1000);
+  CollisionlessParticles dm = make_dm(30, 1000);
   for (std::size_t i = 0; i < gas.size(); ++i) {
     gas.a_grav[i] = {0.5 * static_cast<double>(i), -1.0, 2.0};
     gas.potential[i] = -3.0 - static_cast<double>(i);
@@ -641,7 +641,7 @@ TEST_F(IoTest, SnapshotWithDarkMatter) {
 
   // Without dark matter: no /PartType1, gravity datasets still there (zeros without gravity).
   const std::string gas_only = file("snap_gas.hdf5");
-  fountain::io::write_snapshot(gas_only, make_gas(4), DarkMatterParticles{}, info);
+  fountain::io::write_snapshot(gas_only, make_gas(4), CollisionlessParticles{}, info);
   File g(gas_only, File::Mode::read);
   EXPECT_FALSE(g.exists("/PartType1"));
   EXPECT_EQ(g.read_attribute_uint64("/Header", "NumPart_ThisFile"), (std::vector<std::uint64_t>{4, 0, 0, 0, 0, 0}));
@@ -708,7 +708,7 @@ TEST_F(IoTest, RestartRoundTripWithDarkMatterIsBitwise) {
   const auto s = restart_state(17, 29);
   const std::string path = file("restart.hdf5");
   fountain::io::write_restart(path, s);
-  EXPECT_EQ(fountain::io::kRestartFormatVersion, 5);
+  EXPECT_EQ(fountain::io::kRestartFormatVersion, 6);
   const auto r = fountain::io::read_restart(path);
 
   EXPECT_EQ(r.ti_current, s.ti_current);
@@ -764,7 +764,7 @@ TEST_F(IoTest, RestartWithWrongDarkMatterCountIsRefused) {
     hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
     ASSERT_GE(f, 0);
     hid_t g = H5Gopen2(f, "/Restart", H5P_DEFAULT);
-    hid_t a = H5Aopen(g, "DarkMatterParticles", H5P_DEFAULT);
+    hid_t a = H5Aopen(g, "CollisionlessParticles", H5P_DEFAULT);
     ASSERT_GE(a, 0);
     const std::int64_t wrong = 10;
     EXPECT_GE(H5Awrite(a, H5T_NATIVE_INT64, &wrong), 0);
@@ -773,7 +773,7 @@ TEST_F(IoTest, RestartWithWrongDarkMatterCountIsRefused) {
     EXPECT_GE(H5Fclose(f), 0);
   }
   const std::string msg = error_of([&] { fountain::io::read_restart(path); });
-  EXPECT_TRUE(contains(msg, path + ": /DarkMatter/id has 9 entries, but the file holds 10 dark matter particles"))
+  EXPECT_TRUE(contains(msg, path + ": /DarkMatter/id has 9 entries, but the file holds 10 collisionless particles"))
       << msg;
 
   // A restart file whose dark matter count differs from the initial conditions' is refused

@@ -8,7 +8,7 @@ TemperatureOf ideal_gas_temperature(const Units& units, double gamma, double mea
   return [factor](double u) { return factor * u; };
 }
 
-Diagnostics measure(const GasParticles& gas, const DarkMatterParticles& dm, const TemperatureOf& temperature,
+Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
                     const PhaseThresholds& phases) {
   Diagnostics d;
   for (std::size_t i = 0; i < gas.size(); ++i) {

@@ -4,7 +4,7 @@
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::analysis {
@@ -37,7 +37,7 @@ TemperatureOf ideal_gas_temperature(const Units& units, double gamma, double mea
 
 // Sums over the current particle state (gas at its predicted values; potentials from the
 // last force computation, zero without gravity).
-Diagnostics measure(const GasParticles& gas, const DarkMatterParticles& dm, const TemperatureOf& temperature,
+Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
                     const PhaseThresholds& phases);
 
 }  // namespace fountain::analysis

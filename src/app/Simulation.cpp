@@ -88,10 +88,11 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   if (restart) {
     state = io::read_restart(restart_path(params));
     check_same_parameters(state, params, restart_path(params));
-    if (state.dm.size() != ic.dm.size())
+    if (state.dm.count(Species::DarkMatter) != ic.dm.size())
       throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "
                                    "have {}",
-                                   restart_path(params), state.dm.size(), resolve_ic_path(params), ic.dm.size()));
+                                   restart_path(params), state.dm.count(Species::DarkMatter), resolve_ic_path(params),
+                                   ic.dm.size()));
     ic.gas = std::move(state.gas);
     ic.dm = std::move(state.dm);
   }
@@ -117,6 +118,8 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   if (restart) {
     engine.restore(state.ti_current, state.steps);
     engine.set_radiated_energy(state.radiated_energy);
+    engine.set_star_formation_total(state.star_formation);
+    if (state.next_particle_id > 0) engine.set_next_particle_id(state.next_particle_id);
     if (!quiet) fmt::print(stderr, "restarted from {} at t = {:.6g}, step {}\n", restart_path(params), engine.time(),
                            engine.steps());
   } else {
@@ -137,6 +140,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
       engine.cooling() ? analysis::TemperatureOf([c = engine.cooling()](double u) { return c->temperature(u); })
                        : analysis::ideal_gas_temperature(config.units, config.hydro.gamma);
   info.temperature = temperature;
+  info.star_formation = config.star_formation.enabled;
 
   RunSummary summary;
   auto write = [&] {
@@ -170,6 +174,8 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     out.snapshots_written = summary.snapshots;
     out.next_output = next_output;
     out.radiated_energy = engine.radiated_energy();
+    out.next_particle_id = engine.next_particle_id();
+    out.star_formation = engine.star_formation_total();
     out.parameters_yaml = config.parameters_yaml;
     io::write_restart(restart_path(params), out);
     last_restart = std::chrono::steady_clock::now();

@@ -10,6 +10,7 @@
 #include "cooling/CoolingLoop.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "hydro/HydroLoops.hpp"
+#include "starformation/StarFormationLoop.hpp"
 #include "timestep/Integration.hpp"
 
 namespace fountain {
@@ -20,7 +21,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 }  // namespace
 
-Engine::Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm)
+Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm)
     : config_(config), gas_(std::move(gas)), dm_(std::move(dm)), space_(config.space), executor_(config.threads) {
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
@@ -35,10 +36,34 @@ Engine::Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm
     cooling_ = std::make_unique<cooling::RadiativeCooling>(*cooling_table_, config_.units, config_.cooling.hydrogen_fraction);
     ctx_->cooling = cooling_.get();
   }
+  for (std::size_t i = 0; i < gas_.size(); ++i)
+    if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
+  if (config_.star_formation.enabled) setup_star_formation();
   guess_smoothing_lengths();
 }
 
 Engine::~Engine() = default;
+
+void Engine::setup_star_formation() {
+  const StarFormationParams& p = config_.star_formation;
+  sf_ = std::make_unique<starformation::StarFormationState>();
+  sf_->params = p;
+  sf_->law = {p.efficiency, p.density_threshold(config_.units), p.temperature_threshold, config_.gravity.G};
+  sf_->energy_per_mass = p.energy_per_mass(config_.units);
+  if (cooling_) {
+    const cooling::RadiativeCooling* c = cooling_.get();
+    sf_->temperature = [c](double u) { return c->temperature(u); };
+    sf_->energy_at = [c](double t) { return c->energy_at(t); };
+  } else {
+    // Fully ionised primordial gas (mean molecular weight 0.59), as the diagnostics assume.
+    constexpr double k_boltzmann = 1.380649e-16, m_proton = 1.67262192369e-24;
+    const double factor = (config_.hydro.gamma - 1.0) * 0.59 * m_proton / k_boltzmann * config_.units.specific_energy_cgs();
+    sf_->temperature = [factor](double u) { return factor * u; };
+    sf_->energy_at = [factor](double t) { return t / factor; };
+  }
+  for (auto i : gas_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
+  for (auto i : dm_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
+}
 
 IntegerTime Engine::to_ticks(double t) const {
   const double ticks = std::round((t - timeline_.t_begin) / timeline_.time_base());
@@ -67,6 +92,7 @@ void Engine::guess_smoothing_lengths() {
 void Engine::rebuild() {
   // Every particle must sit at the current time before cells are recut.
   drift_all();
+  remove_dissolved();
   space_.rebuild(gas_, dm_);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
@@ -90,11 +116,26 @@ void Engine::rebuild() {
   rebuild_pending_ = false;
 }
 
+void Engine::remove_dissolved() {
+  std::vector<std::size_t> keep;
+  keep.reserve(gas_.size());
+  for (std::size_t i = 0; i < gas_.size(); ++i)
+    if (gas_.mass[i] > 0.0) keep.push_back(i);
+  if (keep.size() != gas_.size()) gas_.permute(keep);
+}
+
 void Engine::build_graph() {
   graph_ = tasks::TaskGraph();
   const auto& leaves = space_.leaves();
   const std::size_t ncells = space_.cells().size();
   std::vector<int> drift(ncells, -1), ghost(ncells, -1), kick_close(ncells, -1);
+  // Star formation: every cell's conversion, then (after all of them) each cell's search
+  // for hot neighbours, then one task hands feedback out in a fixed order, before any cell
+  // cools or opens its next step.
+  const bool star_formation = sf_ != nullptr;
+  star_formation_done_task_ = star_formation ? graph_.add(types_.star_formation_done, -1, -1, -1) : -1;
+  feedback_apply_task_ = star_formation ? graph_.add(types_.feedback_apply, -1, -1, -1) : -1;
+  if (star_formation) sf_->cells.assign(ncells, {});
   struct Pair { int task, ci, cj; };
   std::vector<Pair> dpairs, fpairs;
   std::size_t npairs = 0;
@@ -123,8 +164,17 @@ void Engine::build_graph() {
     }
     kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
     graph_.add(types_.timestep, c, -1, c);
-    if (cooling_ && space_.cell(c).count > 0) graph_.add(types_.cooling, c, -1, c);
-    graph_.add(types_.kick_open, c, -1, c);
+    const bool has_gas = space_.cell(c).count > 0;
+    if (star_formation && has_gas) {
+      const int form = graph_.add(types_.star_formation, c, -1, c);
+      const int search = graph_.add(types_.feedback_search, c, -1, c);
+      graph_.depends(form, star_formation_done_task_);
+      graph_.depends(star_formation_done_task_, search);
+      graph_.depends(search, feedback_apply_task_);
+    }
+    const int after_feedback = cooling_ && has_gas ? graph_.add(types_.cooling, c, -1, c) : -1;
+    const int open = graph_.add(types_.kick_open, c, -1, c);
+    if (star_formation && has_gas) graph_.depends(feedback_apply_task_, after_feedback >= 0 ? after_feedback : open);
     cell_tasks_[c].second = graph_.size();
   }
   // Reads of a neighbour cell: after its drift (density), after its ghost (force), and
@@ -177,10 +227,16 @@ std::size_t Engine::activate(Phase phase) {
     graph_.task(gravity_tree_task_).active = true;
     step_tasks_.push_back(gravity_tree_task_);
   }
+  if (sf_ && phase == Phase::Full)
+    for (int t : {star_formation_done_task_, feedback_apply_task_}) {
+      graph_.task(t).active = true;
+      step_tasks_.push_back(t);
+    }
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
     if (phase == Phase::Hydro)
-      return type != types_.kick_close && type != types_.timestep && type != types_.cooling && type != types_.kick_open;
+      return type != types_.kick_close && type != types_.timestep && type != types_.cooling && type != types_.kick_open &&
+             type != types_.star_formation && type != types_.feedback_search;
     return true;
   };
   for (int c : leaves) {
@@ -227,7 +283,10 @@ void Engine::run_graph(StepInfo* info) {
   ctx_->h_capped = 0;
   StepContext& ctx = *ctx_;
   const TaskTypes& T = types_;
-  auto runner = [&ctx, &T](const tasks::Task& t) {
+  starformation::StarFormationState* sf = sf_.get();
+  if (sf) sf->time = time();
+  const std::vector<int>& leaves = space_.leaves();
+  auto runner = [&ctx, &T, sf, &leaves](const tasks::Task& t) {
     if (t.type == T.drift) integration::drift(ctx, t.ci);
     else if (t.type == T.density_self) hydro::density_self(ctx, t.ci);
     else if (t.type == T.density_pair) hydro::density_pair(ctx, t.ci, t.cj);
@@ -240,6 +299,9 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
     else if (t.type == T.cooling) cooling::cool_cell(ctx, t.ci);
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
+    else if (t.type == T.star_formation) starformation::form_stars(ctx, *sf, t.ci);
+    else if (t.type == T.feedback_search) starformation::find_hot_neighbours(ctx, *sf, t.ci);
+    else if (t.type == T.feedback_apply) starformation::apply_feedback(ctx, *sf, leaves);
   };
   executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr, &step_tasks_);
   collect_radiated();
@@ -279,6 +341,7 @@ void Engine::initialise() {
   run_graph(nullptr);
   wake_requested();
   initialised_ = true;
+  finish_star_formation();
 }
 
 void Engine::rebuild_now() {
@@ -307,6 +370,25 @@ void Engine::collect_radiated() {
     radiated_ += space_.cell(c).radiated;
     space_.cell(c).radiated = 0.0;
   }
+}
+
+void Engine::finish_star_formation() {
+  if (!sf_) return;
+  starformation::StarFormationTally step = sf_->step_tally;
+  sf_->step_tally = {};
+  for (int c : space_.leaves()) {  // in a fixed order, so the sums are reproducible
+    auto& cf = sf_->cells[static_cast<std::size_t>(c)];
+    step += cf.tally;
+    cf.tally = {};
+  }
+  if (starformation::spawn_and_dissolve(*ctx_, *sf_, next_id_)) {
+    step += sf_->step_tally;
+    sf_->step_tally = {};
+    // New stars must join the cells and dissolved gas leave them before anything else runs.
+    rebuild_now();
+  }
+  sf_last_step_ = step;
+  sf_total_ += step;
 }
 
 void Engine::converge_density(Phase phase) {
@@ -338,6 +420,7 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   if (info.active > 0) {
     run_graph(&info);
     wake_requested();
+    finish_star_formation();
   }
   ++steps_;
   info.step = steps_;
@@ -351,11 +434,12 @@ StepInfo Engine::step(IntegerTime ti_stop) {
 Totals Engine::totals() const {
   Totals t;
   for (std::size_t i = 0; i < gas_.size(); ++i) {
-    const double m = gas_.mass[i];
+    const double m = gas_.dynamical_mass(i);
     t.mass += m;
+    t.reservoir += gas_.reservoir[i];
     t.momentum += gas_.v[i] * m;
     t.kinetic += 0.5 * m * dot(gas_.v[i], gas_.v[i]);
-    t.thermal += m * gas_.u[i];
+    t.thermal += gas_.mass[i] * gas_.u[i];
     t.potential += 0.5 * m * gas_.potential[i];
   }
   for (std::size_t i = 0; i < dm_.size(); ++i) {

@@ -1,5 +1,6 @@
 // The engine: owns particles and cells, builds the task graph and advances the run step by step.
 #pragma once
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -7,14 +8,19 @@
 #include "engine/RunConfig.hpp"
 #include "engine/StepContext.hpp"
 #include "engine/TaskTypes.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
+#include "starformation/StarFormationTally.hpp"
 #include "tasks/Executor.hpp"
 #include "tasks/TaskGraph.hpp"
 #include "timestep/TimeLine.hpp"
 
 namespace fountain {
+
+namespace starformation {
+struct StarFormationState;
+}
 
 // Sums over all particles (gas at predicted values), for conservation checks.
 struct Totals {
@@ -23,6 +29,7 @@ struct Totals {
   double kinetic = 0.0;
   double thermal = 0.0;
   double potential = 0.0;  // gravitational, each pair counted once (zero without gravity)
+  double reservoir = 0.0;  // feedback energy held in reservoirs (not yet thermal)
   double energy() const { return kinetic + thermal + potential; }
 };
 
@@ -40,7 +47,7 @@ struct StepInfo {
 
 class Engine {
  public:
-  Engine(const RunConfig& config, GasParticles gas, DarkMatterParticles dm = {});
+  Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm = {});
   ~Engine();
 
   // First densities (twice, so the MSPH rule sees real densities), forces and timesteps.
@@ -69,8 +76,8 @@ class Engine {
 
   GasParticles& gas() { return gas_; }
   const GasParticles& gas() const { return gas_; }
-  DarkMatterParticles& dark_matter() { return dm_; }
-  const DarkMatterParticles& dark_matter() const { return dm_; }
+  CollisionlessParticles& dark_matter() { return dm_; }
+  const CollisionlessParticles& dark_matter() const { return dm_; }
   const Space& space() const { return space_; }
   const RunConfig& config() const { return config_; }
   const TaskTypes& task_types() const { return types_; }
@@ -84,6 +91,14 @@ class Engine {
   // The run's radiative cooling, or null when it is off.
   const cooling::RadiativeCooling* cooling() const { return cooling_.get(); }
   Totals totals() const;
+  // What star formation and feedback did since the start of the run, and in the last step
+  // (zero when star formation is off); set_star_formation_total continues it after a restart.
+  const starformation::StarFormationTally& star_formation_total() const { return sf_total_; }
+  const starformation::StarFormationTally& star_formation_last_step() const { return sf_last_step_; }
+  void set_star_formation_total(const starformation::StarFormationTally& t) { sf_total_ = t; }
+  bool star_formation_enabled() const { return sf_ != nullptr; }
+  std::uint64_t next_particle_id() const { return next_id_; }
+  void set_next_particle_id(std::uint64_t id) { next_id_ = id; }
   void set_record_timeline(bool on) { record_timeline_ = on; }
 
  private:
@@ -92,6 +107,9 @@ class Engine {
   void converge_density(Phase phase);
   void wake_requested();
   void collect_radiated();  // adds the cells' radiated energy of this step to the total
+  void finish_star_formation();
+  void setup_star_formation();
+  void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays  // tallies, then spawns and dissolves particles between steps
   void build_graph();
   void prepare_step(IntegerTime ti);
   std::size_t activate(Phase phase);
@@ -100,7 +118,7 @@ class Engine {
 
   RunConfig config_;
   GasParticles gas_;
-  DarkMatterParticles dm_;
+  CollisionlessParticles dm_;
   Space space_;
   TimeLine timeline_;
   TaskTypes types_;
@@ -114,6 +132,10 @@ class Engine {
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
   int gravity_tree_task_ = -1;
+  int star_formation_done_task_ = -1, feedback_apply_task_ = -1;
+  std::unique_ptr<starformation::StarFormationState> sf_;
+  starformation::StarFormationTally sf_total_, sf_last_step_;
+  std::uint64_t next_id_ = 0;  // for spawned stars
   double radiated_ = 0.0;
   IntegerTime ti_current_ = 0;
   long long steps_ = 0;

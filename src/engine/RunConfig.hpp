@@ -8,6 +8,7 @@
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
 #include "space/Space.hpp"
+#include "starformation/StarFormationParams.hpp"
 
 namespace fountain {
 
@@ -36,6 +37,7 @@ struct RunConfig {
   HydroParams hydro;
   GravityParams gravity;
   CoolingParams cooling;
+  StarFormationParams star_formation;
   IntegrationParams integration;
   SpaceConfig space;
   Units units;

@@ -6,7 +6,7 @@
 
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
 #include "timestep/TimeLine.hpp"
@@ -28,7 +28,7 @@ struct StepContext {
   const HydroParams& hydro;
   const IntegrationParams& integration;
   const TimeLine& timeline;
-  DarkMatterParticles& dm;
+  CollisionlessParticles& dm;
   const GravityParams& gravity;
 
   // Radiative cooling, when on (the engine owns it). Without it the kicks never let u fall

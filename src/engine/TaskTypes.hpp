@@ -6,7 +6,7 @@ namespace fountain {
 
 struct TaskTypes {
   int drift, density_self, density_pair, ghost, force_self, force_pair, gravity_tree, gravity, kick_close, timestep,
-      cooling, kick_open;
+      cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply;
   tasks::TaskTypeRegistry registry;
 
   TaskTypes() {
@@ -22,6 +22,10 @@ struct TaskTypes {
     timestep = registry.add({"timestep", "", "integration"});
     cooling = registry.add({"cooling", "", "cooling"});
     kick_open = registry.add({"kick", "open", "integration"});
+    star_formation = registry.add({"star_formation", "", "star_formation"});
+    star_formation_done = registry.add({"star_formation", "done", "star_formation"});
+    feedback_search = registry.add({"feedback", "search", "feedback"});
+    feedback_apply = registry.add({"feedback", "apply", "feedback"});
   }
 };
 

@@ -6,7 +6,7 @@ namespace fountain::gravity {
 
 void build_tree(StepContext& ctx) {
   const GasParticles& gas = ctx.gas;
-  const DarkMatterParticles& dm = ctx.dm;
+  const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
   std::vector<Vec3> x;
   std::vector<double> m, eps;
@@ -15,13 +15,13 @@ void build_tree(StepContext& ctx) {
   eps.reserve(n);
   for (std::size_t i = 0; i < gas.size(); ++i) {
     x.push_back(gas.x[i]);
-    m.push_back(gas.mass[i]);
+    m.push_back(gas.dynamical_mass(i));  // hidden stars pull too
     eps.push_back(ctx.gravity.softening_gas);
   }
   for (std::size_t i = 0; i < dm.size(); ++i) {
     x.push_back(dm.x[i]);
     m.push_back(dm.mass[i]);
-    eps.push_back(ctx.gravity.softening_dark_matter);
+    eps.push_back(ctx.gravity.softening(dm.species[i]));
   }
   ctx.tree = std::make_unique<GravityTree>(x, m, eps);
 }
@@ -35,7 +35,7 @@ double old_acceleration(const Vec3& a) {
 
 void walk_cell(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
-  DarkMatterParticles& dm = ctx.dm;
+  CollisionlessParticles& dm = ctx.dm;
   const Cell& cell = ctx.space.cell(c);
   const WalkConfig config = ctx.gravity.walk();
   const GravityTree& tree = *ctx.tree;
@@ -49,7 +49,7 @@ void walk_cell(StepContext& ctx, int c) {
   }
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
     if (!ctx.is_active_dm(i)) continue;
-    const GravityTarget t{dm.x[i], ctx.gravity.softening_dark_matter, old_acceleration(dm.a_grav[i]),
+    const GravityTarget t{dm.x[i], ctx.gravity.softening(dm.species[i]), old_acceleration(dm.a_grav[i]),
                           static_cast<std::int64_t>(gas.size() + i)};
     const GravityResult r = tree.accelerate(t, config);
     dm.a_grav[i] = r.acceleration;

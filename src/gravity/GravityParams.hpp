@@ -1,6 +1,7 @@
 // Self-gravity settings of a run: softenings per species, force accuracy and the timestep criterion.
 #pragma once
 #include "gravity/GravityTree.hpp"
+#include "particles/CollisionlessParticles.hpp"
 
 namespace fountain {
 
@@ -20,6 +21,7 @@ struct GravityParams {
   double eta = 0.08;                   // dt_grav = sqrt(2 eta eps / |a|)
 
   double softening_stars() const { return 0.5 * (softening_gas + softening_dark_matter); }
+  double softening(Species s) const { return s == Species::Star ? softening_stars() : softening_dark_matter; }
   gravity::WalkConfig walk() const {
     gravity::WalkConfig w;
     w.G = G;

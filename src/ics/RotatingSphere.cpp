@@ -238,7 +238,7 @@ RotatingSphereIC rotating_sphere(const RotatingSphereParams& p) {
     gas.time_bin[i] = 0;
   }
 
-  DarkMatterParticles& dm = ic.dm;
+  CollisionlessParticles& dm = ic.dm;
   dm.resize(n_dm);
   for (std::size_t i = 0; i < n_dm; ++i) {
     const Vec3 x = x_all[n_gas + i];

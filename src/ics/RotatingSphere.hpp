@@ -8,7 +8,7 @@
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::ics {
@@ -39,7 +39,7 @@ struct RotatingSphereParams {
 
 struct RotatingSphereIC {
   GasParticles gas;        // id 1..N_gas, mass, x, v = v_full, u = u_full, h
-  DarkMatterParticles dm;  // id N_gas+1..N_gas+N_dm
+  CollisionlessParticles dm;  // id N_gas+1..N_gas+N_dm
   // What the construction found (internal units), all from the actual particle set.
   double lattice_spacing = 0.0;       // d, before the stretch
   double omega = 0.0;                 // angular velocity about z

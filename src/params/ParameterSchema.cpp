@@ -86,6 +86,21 @@ const std::vector<ParamSpec>& parameter_schema() {
       text("cooling.metallicity", "primordial", "Gas metallicity: 'primordial' or [Fe/H] between -3 and 0.5 (the paper tracks no enrichment)."),
       text("cooling.table_directory", "", "Folder of the SD93 .cie tables; empty uses the copy shipped in data/cooling/sutherland_dopita_1993."),
       real("cooling.hydrogen_fraction", "0.76", 0, 1, "Hydrogen mass fraction X (n_H = X rho / m_p).", true),
+      // star formation
+      boolean("star_formation.enabled", "false", "Star formation (paper section 2.2): eligible gas turns into hidden stellar mass, then star particles."),
+      real("star_formation.efficiency", "0.1", 0, 1, "c*: the rate is c* M_gas / t_dyn, t_dyn = 1/sqrt(4 pi G rho)."),
+      real("star_formation.density_threshold_cgs", "5e-26", 0, inf, "rho*: gas forms stars only above this physical density (g cm^-3)."),
+      real("star_formation.temperature_threshold", "4e4", 0, inf, "T* (K): gas forms stars only below it; feedback's cold phase is T < 2 T*.", true),
+      real("star_formation.spawn_fraction", "0.3", 0, 1, "A star particle is spawned when the hidden stellar mass reaches this fraction of the initial gas mass.", true),
+      real("star_formation.dissolve_fraction", "0.1", 0, 1, "A gas particle whose mass falls to this fraction of its initial mass is shared among its gas neighbours.", true),
+      // feedback
+      real("feedback.energy_per_solar_mass", "4e48", 0, inf, "e_sn: supernova energy (erg) per solar mass of stars formed, injected at formation."),
+      real("feedback.eps_cold", "0", 0, 1, "eps_c: fraction of e_sn kept in the star-forming particle's reservoir until it can be promoted to the hot phase."),
+      real("feedback.eps_hot", "0", 0, 1, "eps_h: fraction of e_sn given as thermal energy to the nearest hot neighbours, in proportion to mass."),
+      integer("feedback.hot_neighbours", "10", 1, 1000, "How many nearest hot neighbours receive eps_h and set the promotion threshold."),
+      real("feedback.max_search_radius", "0", 0, inf, "Largest distance (internal length) searched for hot neighbours; 0: no limit."),
+      real("feedback.promotion_factor", "50", 1, inf, "Promotion threshold T_prom is at least this times T*."),
+      real("feedback.promotion_hot_factor", "2", 0, inf, "T_prom is at least this times the mean temperature of the hot neighbours."),
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),

@@ -18,6 +18,18 @@ struct GasParticles {
   // Identity and conserved state.
   std::vector<std::uint64_t> id;
   std::vector<double> mass;           // gas mass (what hydro sees)
+
+  // Hybrid gas/star state (paper section 2.2-2.3). Gravity and inertia see mass plus the
+  // hidden stellar mass; hydro sees the gas mass alone.
+  std::vector<double> mass_initial;       // gas mass at the start (spawning and dissolving thresholds)
+  std::vector<double> mass_stars_hidden;  // stars formed and not yet spawned
+  std::vector<double> reservoir;          // cold-phase feedback energy held back (energy, not specific)
+  std::vector<std::uint8_t> promoted;     // 1 once promoted to the hot phase by feedback
+  std::vector<double> promotion_time;     // when it was (last) promoted; -1 if never
+  // Set by star formation for this step's feedback task: energy for the hot neighbours and
+  // the stellar mass formed.
+  std::vector<double> feedback_hot_energy;
+  std::vector<double> mass_formed;
   std::vector<Vec3> x;                // position
   std::vector<Vec3> v_full;           // integrated velocity (half-step after a first kick)
   std::vector<double> u_full;         // integrated specific internal energy
@@ -65,7 +77,9 @@ struct GasParticles {
   std::size_t size() const { return id.size(); }
 
   void resize(std::size_t n) {
-    id.resize(n); mass.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
+    id.resize(n); mass.resize(n);
+    mass_initial.resize(n); mass_stars_hidden.resize(n); reservoir.resize(n); promoted.resize(n);
+    promotion_time.resize(n, -1.0); feedback_hot_energy.resize(n); mass_formed.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
     v.resize(n); u.resize(n); h.resize(n); rho.resize(n);
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
@@ -78,7 +92,11 @@ struct GasParticles {
     wake_bin.resize(n, kNoBin);
   }
 
-  // Reorder every field by `order` (new index k holds old particle order[k]).
+  // Mass that gravity and inertia see: gas plus hidden stars.
+  double dynamical_mass(std::size_t i) const { return mass[i] + mass_stars_hidden[i]; }
+
+  // Reorder every field by `order` (new index k holds old particle order[k]); an order
+  // shorter than the particle number keeps only the particles it names.
   void permute(const std::vector<std::size_t>& order);
 };
 

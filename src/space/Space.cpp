@@ -36,11 +36,11 @@ double Space::box_distance(const Cell& a, const Cell& b) const {
 // Sorting state of one rebuild: the permutation being built for each species.
 struct Space::SortState {
   GasParticles& gas;
-  DarkMatterParticles& dm;
+  CollisionlessParticles& dm;
   std::vector<std::size_t> order, scratch, dm_order, dm_scratch;
 };
 
-void Space::rebuild(GasParticles& gas, DarkMatterParticles& dm) {
+void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
   ++rebuilds_;
   const std::size_t n = gas.size(), n_dm = dm.size();
   // The box.

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "core/Vec3.hpp"
-#include "particles/DarkMatterParticles.hpp"
+#include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Cell.hpp"
 
@@ -23,7 +23,7 @@ class Space {
 
   // Sorts the particles of both species into cells (every field permuted), builds the octree,
   // the leaves' cover radii and their neighbour lists. Positions are wrapped into a periodic box.
-  void rebuild(GasParticles& gas, DarkMatterParticles& dm);
+  void rebuild(GasParticles& gas, CollisionlessParticles& dm);
 
   const std::vector<Cell>& cells() const { return cells_; }
   std::vector<Cell>& cells() { return cells_; }

@@ -63,7 +63,7 @@ void drift(StepContext& ctx, int c) {
     h_max = std::max(h_max, gas.h[i]);
   }
   if (dt != 0.0) {
-    DarkMatterParticles& dm = ctx.dm;
+    CollisionlessParticles& dm = ctx.dm;
     for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
       dm.x[i] += dm.v_full[i] * dt;
       dm.v[i] += dm.a_grav[i] * dt;
@@ -80,6 +80,9 @@ void kick_close(StepContext& ctx, int c) {
   Cell& cell = ctx.space.cell(c);
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
+    // The force loop gave the hydro force per unit gas mass; hidden stars add inertia
+    // (momentum (m + m_hidden) v is what pairs exchange).
+    if (gas.mass_stars_hidden[i] > 0.0) gas.a_hydro[i] *= gas.mass[i] / gas.dynamical_mass(i);
     // Half of the step that ends now (shorter than its bin's if the particle was woken).
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
@@ -101,7 +104,7 @@ void kick_close(StepContext& ctx, int c) {
     gas.v[i] = gas.v_full[i];
     gas.u[i] = gas.u_full[i];
   }
-  DarkMatterParticles& dm = ctx.dm;
+  CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
     if (ctx.is_active_dm(i)) {
       dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current));
@@ -143,21 +146,21 @@ void timestep(StepContext& ctx, int c) {
     }
     ti_end_min = std::min(ti_end_min, TimeLine::step_end(gas.time_bin[i], ctx.ti_current));
   }
-  DarkMatterParticles& dm = ctx.dm;
+  CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
     if (ctx.is_active_dm(i)) {
       if (!std::isfinite(norm(dm.a_grav[i])) || !std::isfinite(norm(dm.x[i])) || !std::isfinite(norm(dm.v_full[i])))
-        throw InputError(fmt::format("dark matter particle id {} has a non-finite state at t = {} (|x| = {}, |v| = {}, |a| = {})",
-                                     dm.id[i], ctx.timeline.time(ctx.ti_current), norm(dm.x[i]), norm(dm.v_full[i]),
+        throw InputError(fmt::format("{} particle id {} has a non-finite state at t = {} (|x| = {}, |v| = {}, |a| = {})",
+                                     species_name(dm.species[i]), dm.id[i], ctx.timeline.time(ctx.ti_current), norm(dm.x[i]), norm(dm.v_full[i]),
                                      norm(dm.a_grav[i])));
-      const double dt = gravity_timestep(ctx.gravity, ctx.gravity.softening_dark_matter, dm.a_grav[i]);
+      const double dt = gravity_timestep(ctx.gravity, ctx.gravity.softening(dm.species[i]), dm.a_grav[i]);
       if (dt < ctx.integration.dt_min)
-        throw InputError(fmt::format("dark matter particle id {} needs a timestep {} below dt_min = {} at t = {}",
-                                     dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
+        throw InputError(fmt::format("{} particle id {} needs a timestep {} below dt_min = {} at t = {}",
+                                     species_name(dm.species[i]), dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
       const int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
       if (bin < 0)
-        throw InputError(fmt::format("dark matter particle id {} needs a timestep {} shorter than one tick of the timeline",
-                                     dm.id[i], dt));
+        throw InputError(fmt::format("{} particle id {} needs a timestep {} shorter than one tick of the timeline",
+                                     species_name(dm.species[i]), dm.id[i], dt));
       dm.time_bin[i] = static_cast<TimeBin>(bin);
       dm.ti_begin[i] = ctx.ti_current;
     }
@@ -180,7 +183,7 @@ void kick_open(StepContext& ctx, int c) {
     v_max = std::max(v_max, norm(gas.v_full[i]));
   }
   cell.v_max = v_max;
-  DarkMatterParticles& dm = ctx.dm;
+  CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
     if (ctx.is_active_dm(i)) dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.step(dm.time_bin[i]));
 }

@@ -1,0 +1,232 @@
+#include "starformation/StarFormationLoop.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "hydro/HydroIact.hpp"
+#include "hydro/HydroLoops.hpp"
+#include "hydro/Kernel.hpp"
+#include "starformation/NeighbourSearch.hpp"
+
+namespace fountain::starformation {
+
+namespace {
+
+bool is_cold(const StarFormationState& sf, const GasParticles& gas, std::size_t j) {
+  return sf.law.feedback_cold(gas.rho[j], sf.temperature(gas.u[j]));
+}
+
+// Gas particle j takes gas mass dm_gas and hidden stellar mass dm_hidden moving at v_src
+// with specific energy u_src, plus `heat`. Mass and momentum are conserved exactly; the
+// kinetic energy the inelastic merger loses becomes heat, so the total energy is too.
+void absorb(GasParticles& gas, std::size_t j, double dm_gas, double dm_hidden, const Vec3& v_src, double u_src,
+            double heat, StarFormationTally& tally) {
+  const double m_j = gas.dynamical_mass(j), dm = dm_gas + dm_hidden;
+  const Vec3 v_new = (gas.v[j] * m_j + v_src * dm) * (1.0 / (m_j + dm));
+  const double lost = 0.5 * m_j * dot(gas.v[j], gas.v[j]) + 0.5 * dm * dot(v_src, v_src) -
+                      0.5 * (m_j + dm) * dot(v_new, v_new);
+  const double thermal = gas.mass[j] * gas.u[j] + dm_gas * u_src + heat + lost;
+  gas.mass[j] += dm_gas;
+  gas.mass_stars_hidden[j] += dm_hidden;
+  // The predicted and the integrated state move together, so neither loses the transfer.
+  const double du = thermal / gas.mass[j] - gas.u[j];
+  gas.u[j] += du;
+  gas.u_full[j] += du;
+  const Vec3 dv = v_new - gas.v[j];
+  gas.v[j] += dv;
+  gas.v_full[j] += dv;
+  tally.kinetic_to_heat += lost;
+}
+
+// Shares (dm_gas, dm_hidden, heat) of particle i among gas neighbours within h_i that pass
+// `accept`, in proportion to their kernel weight W(r_ij, h_i). False if there are none.
+template <class Accept>
+bool share_among_neighbours(const StepContext& ctx, GasParticles& gas, std::size_t i, double dm_gas,
+                            double dm_hidden, double heat, Accept accept, StarFormationTally& tally) {
+  std::vector<std::pair<std::size_t, double>> to;
+  double w_sum = 0.0;
+  const double h_inv = 1.0 / gas.h[i];
+  for_each_within(ctx.space, gas, gas.x[i], gas.h[i], [&](std::size_t j, const Vec3&, double r) {
+    if (j == i || !(gas.mass[j] > 0.0) || !accept(j)) return;
+    const double w = kernel::value(r, h_inv);
+    if (w > 0.0) {
+      to.emplace_back(j, w);
+      w_sum += w;
+    }
+  });
+  if (to.empty()) return false;
+  const Vec3 v_i = gas.v[i];
+  const double u_i = gas.u[i];
+  for (const auto& [j, w] : to) {
+    const double f = w / w_sum;
+    absorb(gas, j, f * dm_gas, f * dm_hidden, v_i, u_i, f * heat, tally);
+  }
+  return true;
+}
+
+}  // namespace
+
+void form_stars(StepContext& ctx, StarFormationState& sf, int c) {
+  GasParticles& gas = ctx.gas;
+  const Cell& cell = ctx.space.cell(c);
+  CellFeedback& cf = sf.cells[static_cast<std::size_t>(c)];
+  cf.sites.clear();
+  cf.neighbours.clear();
+  const bool feedback_sites = sf.params.eps_hot > 0.0 || sf.params.eps_cold > 0.0;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (!ctx.is_active(i)) continue;
+    gas.mass_formed[i] = 0.0;
+    gas.feedback_hot_energy[i] = 0.0;
+    const double dt = ctx.timeline.step(gas.time_bin[i]);
+    const GasState s{gas.div_v[i], gas.rho[i], gas.h[i], hydro::sound_speed(gas.rho[i], gas.u[i], ctx.hydro.gamma),
+                     sf.temperature(gas.u[i])};
+    if (dt > 0.0 && sf.law.check(s) == Eligibility::Eligible) {
+      const double dm = sf.law.mass_formed(gas.mass[i], gas.rho[i], dt);
+      gas.mass[i] -= dm;
+      gas.mass_stars_hidden[i] += dm;
+      gas.mass_formed[i] = dm;
+      cf.tally.mass_formed += dm;
+      cf.tally.thermal_locked += dm * gas.u_full[i];
+      const FeedbackShares e = split_feedback(sf.energy_per_mass * dm, sf.params.eps_cold, sf.params.eps_hot);
+      gas.u_full[i] += e.own / gas.mass[i];
+      gas.u[i] = gas.u_full[i];
+      gas.reservoir[i] += e.reservoir;
+      gas.feedback_hot_energy[i] = e.hot;
+      cf.tally.energy_own += e.own;
+      cf.tally.energy_reservoir += e.reservoir;
+      cf.tally.energy_hot += e.hot;
+    }
+    if (feedback_sites && (gas.feedback_hot_energy[i] > 0.0 || gas.reservoir[i] > 0.0))
+      cf.sites.push_back({i, 0, 0, -1.0});
+  }
+}
+
+void find_hot_neighbours(StepContext& ctx, StarFormationState& sf, int c) {
+  const GasParticles& gas = ctx.gas;
+  CellFeedback& cf = sf.cells[static_cast<std::size_t>(c)];
+  const auto k = static_cast<std::size_t>(sf.params.hot_neighbours);
+  for (FeedbackSite& site : cf.sites) {
+    const std::vector<std::size_t> hot =
+        nearest(ctx.space, gas, gas.x[site.particle], site.particle, k, sf.params.max_search_radius,
+                [&](std::size_t j) { return gas.mass[j] > 0.0 && !is_cold(sf, gas, j); });
+    site.first = cf.neighbours.size();
+    site.count = hot.size();
+    double t_sum = 0.0;
+    for (std::size_t j : hot) {
+      cf.neighbours.push_back(j);
+      t_sum += sf.temperature(gas.u[j]);
+    }
+    site.mean_hot_temperature = hot.empty() ? -1.0 : t_sum / static_cast<double>(hot.size());
+  }
+}
+
+void apply_feedback(StepContext& ctx, StarFormationState& sf, const std::vector<int>& leaves) {
+  GasParticles& gas = ctx.gas;
+  const StarFormationParams& p = sf.params;
+  for (int c : leaves) {
+    CellFeedback& cf = sf.cells[static_cast<std::size_t>(c)];
+    for (const FeedbackSite& site : cf.sites) {
+      const std::size_t i = site.particle;
+      const double e_hot = gas.feedback_hot_energy[i];
+      if (e_hot > 0.0) {
+        if (site.count > 0) {
+          double m_sum = 0.0;
+          for (std::size_t n = 0; n < site.count; ++n) m_sum += gas.mass[cf.neighbours[site.first + n]];
+          for (std::size_t n = 0; n < site.count; ++n) {
+            const std::size_t j = cf.neighbours[site.first + n];
+            // Energy in proportion to mass: every hot neighbour gets the same du.
+            const double du = e_hot / m_sum;
+            gas.u[j] += du;
+            gas.u_full[j] += du;
+            if (ctx.hydro.timestep_limiter) gas.wake_bin[j] = std::min(gas.wake_bin[j], gas.time_bin[i]);
+          }
+        } else {
+          gas.u[i] += e_hot / gas.mass[i];
+          gas.u_full[i] += e_hot / gas.mass[i];
+          ++sf.step_tally.hot_without_neighbours;
+        }
+        gas.feedback_hot_energy[i] = 0.0;
+      }
+      if (gas.reservoir[i] > 0.0) {
+        const double t_prom =
+            promotion_temperature(p.temperature_threshold, p.promotion_factor, p.promotion_hot_factor,
+                                  site.mean_hot_temperature);
+        if (gas.u_full[i] + gas.reservoir[i] / gas.mass[i] >= sf.energy_at(t_prom)) promote(ctx, sf, i);
+      }
+    }
+    // Sites live for one step: an inactive cell must not hand its old ones out again.
+    cf.sites.clear();
+    cf.neighbours.clear();
+  }
+}
+
+void promote(StepContext& ctx, StarFormationState& sf, std::size_t i) {
+  GasParticles& gas = ctx.gas;
+  StarFormationTally& tally = sf.step_tally;
+  const double du = gas.reservoir[i] / gas.mass[i];
+  gas.u_full[i] += du;
+  gas.u[i] += du;
+  tally.energy_released += gas.reservoir[i];
+  gas.reservoir[i] = 0.0;
+  gas.promoted[i] = 1;
+  gas.promotion_time[i] = sf.time;
+  ++tally.promotions;
+  // The density without the cold neighbours (h kept): the promoted particle now sees the
+  // hot phase only, and the MSPH rule reads this density from now on.
+  const double h_inv = 1.0 / gas.h[i];
+  double rho = gas.mass[i] * kernel::value(0.0, h_inv);
+  for_each_within(ctx.space, gas, gas.x[i], gas.h[i], [&](std::size_t j, const Vec3&, double r) {
+    if (j == i || !(gas.mass[j] > 0.0) || is_cold(sf, gas, j)) return;
+    rho += gas.mass[j] * kernel::value(r, h_inv);
+  });
+  gas.rho[i] = rho;
+  gas.rho_msph[i] = rho;
+  hydro::prepare_force(gas, i, ctx.hydro);
+  // Its hidden stars stay with the cold phase.
+  const double hidden = gas.mass_stars_hidden[i];
+  if (hidden > 0.0 &&
+      share_among_neighbours(ctx, gas, i, 0.0, hidden, 0.0, [&](std::size_t j) { return is_cold(sf, gas, j); }, tally))
+    gas.mass_stars_hidden[i] = 0.0;
+}
+
+bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t& next_id) {
+  GasParticles& gas = ctx.gas;
+  CollisionlessParticles& stars = ctx.dm;
+  StarFormationTally& tally = sf.step_tally;
+  const StarFormationParams& p = sf.params;
+  bool changed = false;
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    if (!(gas.mass[i] > 0.0)) continue;
+    const double m0 = gas.mass_initial[i];
+    if (gas.mass_stars_hidden[i] >= p.spawn_fraction * m0 * (1.0 - 1e-12)) {
+      // The star starts half-kicked by gravity alone over the parent's current step.
+      const double half = 0.5 * ctx.timeline.step(gas.time_bin[i]);
+      const Vec3 v_full = gas.v_full[i] - gas.a_hydro[i] * half;
+      stars.push_back(next_id++, Species::Star, gas.mass_stars_hidden[i], gas.x[i], v_full, gas.v[i], sf.time,
+                      gas.id[i]);
+      const std::size_t s = stars.size() - 1;
+      stars.a_grav[s] = gas.a_grav[i];
+      stars.potential[s] = gas.potential[i];
+      stars.time_bin[s] = gas.time_bin[i];
+      stars.ti_begin[s] = gas.ti_begin[i];
+      gas.mass_stars_hidden[i] = 0.0;
+      ++tally.stars_spawned;
+      changed = true;
+    }
+    if (gas.mass[i] <= p.dissolve_fraction * m0 * (1.0 + 1e-12)) {
+      const bool shared = share_among_neighbours(ctx, gas, i, gas.mass[i], gas.mass_stars_hidden[i],
+                                                 gas.reservoir[i], [](std::size_t) { return true; }, tally);
+      if (shared) {
+        tally.energy_released += gas.reservoir[i];
+        gas.mass[i] = 0.0;
+        gas.mass_stars_hidden[i] = 0.0;
+        gas.reservoir[i] = 0.0;
+        ++tally.gas_dissolved;
+        changed = true;
+      }
+    }
+  }
+  return changed;
+}
+
+}  // namespace fountain::starformation
