@@ -97,6 +97,10 @@ class Engine {
   const starformation::StarFormationTally& star_formation_last_step() const { return sf_last_step_; }
   void set_star_formation_total(const starformation::StarFormationTally& t) { sf_total_ = t; }
   bool star_formation_enabled() const { return sf_ != nullptr; }
+  // Tallies this step's star formation, then spawns stars and dissolves gas (recutting the
+  // cells if any particle came or went). Every step ends with it; public so that tests can
+  // apply it to a state they set up.
+  void finish_star_formation();
   std::uint64_t next_particle_id() const { return next_id_; }
   void set_next_particle_id(std::uint64_t id) { next_id_ = id; }
   void set_record_timeline(bool on) { record_timeline_ = on; }
@@ -107,9 +111,8 @@ class Engine {
   void converge_density(Phase phase);
   void wake_requested();
   void collect_radiated();  // adds the cells' radiated energy of this step to the total
-  void finish_star_formation();
   void setup_star_formation();
-  void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays  // tallies, then spawns and dissolves particles between steps
+  void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   void build_graph();
   void prepare_step(IntegerTime ti);
   std::size_t activate(Phase phase);

@@ -33,8 +33,6 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.gravity = GravityParams::from(p, c.units);
   c.cooling = CoolingParams::from(p);
   c.star_formation = StarFormationParams::from(p);
-  if (c.star_formation.enabled && !c.gravity.enabled)
-    throw InputError(fmt::format("{}: star formation needs self-gravity (t_dyn uses G): set gravity.enabled: true", p.origin()));
   c.output.directory = p.text("output.directory");
   c.output.basename = p.text("output.basename");
   c.output.delta_time = p.real("output.delta_time");

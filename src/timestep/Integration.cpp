@@ -157,7 +157,8 @@ void timestep(StepContext& ctx, int c) {
       if (dt < ctx.integration.dt_min)
         throw InputError(fmt::format("{} particle id {} needs a timestep {} below dt_min = {} at t = {}",
                                      species_name(dm.species[i]), dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
-      const int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
+      // Without gravity (stars spawned in a hydro-only run) nothing limits the step but dt_max.
+      const int bin = std::isfinite(dt) ? std::min(ctx.timeline.bin_for(dt), max_bin) : max_bin;
       if (bin < 0)
         throw InputError(fmt::format("{} particle id {} needs a timestep {} shorter than one tick of the timeline",
                                      species_name(dm.species[i]), dm.id[i], dt));

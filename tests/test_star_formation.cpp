@@ -1,0 +1,353 @@
+// Star formation and multiphase feedback (PHYSICS.md sections 5-6) in the engine: the rate
+// against its closed form, each eligibility condition, conservation through spawning and
+// dissolving, feedback bookkeeping, promotion, and reproducibility across thread counts.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <vector>
+
+#include "TestSetups.hpp"
+#include "engine/Engine.hpp"
+#include "hydro/Kernel.hpp"
+#include "ics/Lattice.hpp"
+#include "starformation/StarFormationLaw.hpp"
+
+namespace fountain {
+namespace {
+
+// Internal units kpc, Msun, km/s: one time unit is 0.978 Gyr.
+Units kpc_units() {
+  Units u;
+  u.length_cgs = 3.0856775814913673e21;
+  return u;
+}
+
+constexpr double kSide = 20.0;  // kpc
+const Vec3 kCentre{10.0, 10.0, 10.0};
+constexpr double kMuFactor = (5.0 / 3.0 - 1.0) * 0.59 * 1.67262192369e-24 / 1.380649e-16;  // T = this u (cgs)
+
+double energy_of(double temperature_k, const Units& units) {
+  return temperature_k / kMuFactor / units.specific_energy_cgs();
+}
+
+// A cube of cold gas on a BCC lattice, density rho (g cm^-3), temperature T, velocity
+// -k (x - centre): converging (div v = -3k) for k > 0.
+GasParticles make_cube(int cells, double rho_cgs, double temperature_k, double k, const Units& units) {
+  const auto pts = ics::bcc_lattice({0, 0, 0}, {kSide, kSide, kSide}, cells, cells, cells);
+  const double rho = rho_cgs / units.density_cgs();
+  const double m = rho * kSide * kSide * kSide / static_cast<double>(pts.size());
+  GasParticles g;
+  g.resize(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    g.id[i] = i + 1;
+    g.mass[i] = m;
+    g.x[i] = pts[i];
+    g.v[i] = g.v_full[i] = (pts[i] - kCentre) * (-k);
+    g.u[i] = g.u_full[i] = energy_of(temperature_k, units);
+  }
+  return g;
+}
+
+RunConfig sf_config(int threads = 2) {
+  RunConfig c = test::test_config(false, {}, true, threads);
+  c.units = kpc_units();
+  c.gravity.G = c.units.gravitational_constant();
+  c.hydro.neighbours_tolerance = 1e-3;
+  c.integration.dt_max = 1.0 / 1024.0;
+  c.t_end = 1.0;
+  c.star_formation.enabled = true;
+  c.star_formation.energy_per_solar_mass_erg = 0.0;  // no feedback unless a test sets it
+  return c;
+}
+
+bool central(const Vec3& x, double radius) {
+  const Vec3 d = x - kCentre;
+  return dot(d, d) < radius * radius;
+}
+
+double gas_mass_near_centre(const Engine& e, const std::vector<std::uint64_t>& ids) {
+  double m = 0.0;
+  const GasParticles& g = e.gas();
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if (std::binary_search(ids.begin(), ids.end(), g.id[i])) m += g.mass[i];
+  return m;
+}
+
+std::vector<std::uint64_t> central_ids(const Engine& e, double radius) {
+  std::vector<std::uint64_t> ids;
+  for (std::size_t i = 0; i < e.gas().size(); ++i)
+    if (central(e.gas().x[i], radius)) ids.push_back(e.gas().id[i]);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+double total_mass(const Engine& e) { return e.totals().mass; }
+
+// ---- The law itself -----------------------------------------------------------------------
+
+TEST(StarFormationLaw, EachConditionAloneBlocksFormation) {
+  starformation::StarFormationLaw law{0.1, 1.0, 4e4, 1.0};
+  const starformation::GasState ok{-1.0, 2.0, 10.0, 1.0, 1e4};
+  EXPECT_EQ(law.check(ok), starformation::Eligibility::Eligible);
+  auto with = [&](auto change) {
+    starformation::GasState s = ok;
+    change(s);
+    return law.check(s);
+  };
+  EXPECT_EQ(with([](auto& s) { s.div_v = 0.0; }), starformation::Eligibility::NotConverging);
+  EXPECT_EQ(with([](auto& s) { s.rho = 0.5; }), starformation::Eligibility::TooSparse);
+  EXPECT_EQ(with([](auto& s) { s.sound_speed = 100.0; }), starformation::Eligibility::PressureSupported);
+  EXPECT_EQ(with([](auto& s) { s.temperature = 5e4; }), starformation::Eligibility::TooHot);
+}
+
+TEST(StarFormationLaw, PromotionThresholdIsTheHigherOfTheTwoRules) {
+  EXPECT_DOUBLE_EQ(starformation::promotion_temperature(4e4, 50, 2, 5e5), 2e6);   // 50 T* wins
+  EXPECT_DOUBLE_EQ(starformation::promotion_temperature(4e4, 50, 2, 3e6), 6e6);   // 2 <T_hot> wins
+  EXPECT_DOUBLE_EQ(starformation::promotion_temperature(4e4, 50, 2, -1.0), 2e6);  // none found
+}
+
+TEST(StarFormationLaw, FeedbackSharesAddUpToTheEnergy) {
+  const auto s = starformation::split_feedback(3.0, 0.4, 0.25);
+  EXPECT_DOUBLE_EQ(s.reservoir, 1.2);
+  EXPECT_DOUBLE_EQ(s.hot, 0.75);
+  EXPECT_DOUBLE_EQ(s.own + s.reservoir + s.hot, 3.0);
+}
+
+// ---- The rate ------------------------------------------------------------------------------
+
+// All central gas is eligible and its density follows its gas mass (rho = y rho_0), so
+// dy/dt = -c* y sqrt(4 pi G rho_0 y): y(t) = (1 + a t / 2)^-2 with a = c* sqrt(4 pi G rho_0).
+TEST(StarFormationRate, UniformColdGasFollowsTheClosedForm) {
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  Engine e(c, make_cube(12, 1e-24, 1e4, 1e-3, units));
+  e.initialise();
+  const std::vector<std::uint64_t> ids = central_ids(e, 4.0);
+  ASSERT_GT(ids.size(), 100u);
+  // rho_0 as the code measures it at the start (the mean over the central particles; the
+  // first step's conversion has not changed it: density uses the mass the loop saw).
+  double rho0 = 0.0, m0 = 0.0;
+  for (std::size_t i = 0; i < e.gas().size(); ++i)
+    if (std::binary_search(ids.begin(), ids.end(), e.gas().id[i])) {
+      rho0 += e.gas().rho[i];
+      m0 += e.gas().mass_initial[i];
+    }
+  rho0 /= static_cast<double>(ids.size());
+  const double a = c.star_formation.efficiency * std::sqrt(4.0 * std::numbers::pi * c.gravity.G * rho0);
+  const double mass_start = total_mass(e);
+  double worst = 0.0;
+  int checks = 0;
+  // The first step's conversion happened at initialise (t = 0, over the first step).
+  while (e.time() < 0.15) {
+    e.step();
+    // Gas converted so far covers [0, t + dt_next] for each particle: compare at step ends,
+    // where every central particle has just converted its next step (one common bin).
+    const double t_covered = e.time() + c.integration.dt_max;
+    const double y = gas_mass_near_centre(e, ids) / m0;
+    const double expected = 1.0 / ((1.0 + 0.5 * a * t_covered) * (1.0 + 0.5 * a * t_covered));
+    worst = std::max(worst, std::fabs(y / expected - 1.0));
+    ++checks;
+  }
+  EXPECT_GT(checks, 100);
+  std::printf("star formation rate: worst deviation from the closed form %.2e over %d steps\n", worst, checks);
+  EXPECT_LT(worst, 0.01) << "gas mass fraction off the closed form by " << worst;
+  // The run formed a star particle per central gas particle once y < 0.7.
+  EXPECT_GT(e.star_formation_total().stars_spawned, static_cast<long long>(ids.size()) / 2);
+  EXPECT_EQ(e.dark_matter().count(Species::Star), static_cast<std::size_t>(e.star_formation_total().stars_spawned));
+  EXPECT_NEAR(total_mass(e), mass_start, 1e-12 * mass_start);
+}
+
+// Each condition broken alone, everything else as in the rate test: no star forms.
+struct BrokenCondition {
+  const char* name;
+  double k;             // velocity gradient (negative: expanding)
+  double temperature;   // K
+  double t_star;        // K
+  double rho_star_cgs;  // g cm^-3
+};
+
+class StarFormationConditions : public ::testing::TestWithParam<BrokenCondition> {};
+
+TEST_P(StarFormationConditions, GasBreakingOneConditionFormsNoStars) {
+  const BrokenCondition& b = GetParam();
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  c.star_formation.temperature_threshold = b.t_star;
+  c.star_formation.density_threshold_cgs = b.rho_star_cgs;
+  Engine e(c, make_cube(12, 1e-24, b.temperature, b.k, units));
+  e.initialise();
+  const std::vector<std::uint64_t> ids = central_ids(e, 4.0);
+  for (int s = 0; s < 20; ++s) e.step();
+  double hidden = 0.0;
+  for (std::size_t i = 0; i < e.gas().size(); ++i)
+    if (std::binary_search(ids.begin(), ids.end(), e.gas().id[i])) hidden += e.gas().mass_stars_hidden[i];
+  EXPECT_EQ(hidden, 0.0) << b.name;
+}
+
+// Controls: the same cube with the condition restored forms stars within these 20 steps
+// (the rate test shows it for the baseline; these keep the hot variants honest).
+TEST(StarFormationConditions, HotButUnsupportedGasWithAHighThresholdForms) {
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  c.star_formation.temperature_threshold = 1e7;
+  Engine e(c, make_cube(12, 1e-24, 5e4, 1e-3, units));
+  e.initialise();
+  for (int s = 0; s < 20; ++s) e.step();
+  EXPECT_GT(e.star_formation_total().mass_formed, 0.0);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EachCondition, StarFormationConditions,
+    ::testing::Values(BrokenCondition{"expanding (div v > 0)", -1e-3, 1e4, 4e4, 5e-26},
+                      BrokenCondition{"below rho*", 1e-3, 1e4, 4e4, 2e-24},
+                      // 5e5 K with T* raised to 1e7 K: h / c_s < t_dyn, every other condition holds.
+                      BrokenCondition{"pressure supported (h/c_s < t_dyn)", 1e-3, 5e5, 1e7, 5e-26},
+                      BrokenCondition{"above T*", 1e-3, 5e4, 4e4, 5e-26}),
+    [](const auto& info) { return std::to_string(info.index); });
+
+// ---- Conservation through spawning and dissolving ------------------------------------------
+
+struct MassMomentumEnergy {
+  double mass = 0.0;
+  Vec3 momentum;
+  double energy = 0.0;  // kinetic + thermal (predicted state)
+};
+
+MassMomentumEnergy measure(const Engine& e) {
+  const Totals t = e.totals();
+  return {t.mass, t.momentum, t.kinetic + t.thermal};
+}
+
+TEST(StarFormationConservation, SpawningAndDissolvingConserveMassMomentumAndEnergy) {
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  Engine e(c, make_cube(8, 1e-24, 1e4, 1e-3, units));
+  e.initialise();
+  GasParticles& g = e.gas();
+  // Set up the thresholds' cases directly: a third of the particles hold hidden stars worth a
+  // star particle, a third are down to their dissolving mass, with velocities of all sizes.
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const double m0 = g.mass_initial[i];
+    g.v[i] = g.v_full[i] = Vec3{std::sin(1.0 * i), std::cos(2.0 * i), std::sin(3.0 * i)} * 30.0;
+    if (i % 3 == 0) {
+      g.mass_stars_hidden[i] = 0.31 * m0;
+      g.mass[i] = 0.69 * m0;
+    } else if (i % 3 == 1) {
+      g.mass_stars_hidden[i] = 0.2 * m0;
+      g.mass[i] = 0.1 * m0;
+    }
+  }
+  const MassMomentumEnergy before = measure(e);
+  double momentum_scale = 0.0;
+  for (std::size_t i = 0; i < g.size(); ++i) momentum_scale += g.dynamical_mass(i) * norm(g.v[i]);
+  const std::size_t n_gas = g.size();
+  e.finish_star_formation();
+  const MassMomentumEnergy after = measure(e);
+  const auto& tally = e.star_formation_last_step();
+  EXPECT_GT(tally.stars_spawned, 0);
+  EXPECT_GT(tally.gas_dissolved, 0);
+  EXPECT_EQ(e.gas().size(), n_gas - static_cast<std::size_t>(tally.gas_dissolved));
+  EXPECT_NEAR(after.mass, before.mass, 1e-13 * before.mass);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(after.momentum[k], before.momentum[k], 1e-13 * momentum_scale);
+  EXPECT_NEAR(after.energy, before.energy, 1e-12 * before.energy);
+  // Spawned stars carry their parent's id, the time and the hidden mass.
+  const CollisionlessParticles& s = e.dark_matter();
+  ASSERT_EQ(s.count(Species::Star), static_cast<std::size_t>(tally.stars_spawned));
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    EXPECT_GT(s.parent_id[i], 0u);
+    EXPECT_GT(s.id[i], n_gas);
+    EXPECT_EQ(s.birth_time[i], e.time());
+  }
+}
+
+// ---- Feedback ------------------------------------------------------------------------------
+
+double thermal_kinetic_reservoir(const Engine& e) {
+  const Totals t = e.totals();
+  return t.thermal + t.kinetic + t.reservoir;
+}
+
+TEST(Feedback, EachChannelGetsItsShareAndTheEnergyBudgetCloses) {
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  c.star_formation.energy_per_solar_mass_erg = 4e48;
+  c.star_formation.eps_cold = 0.4;
+  c.star_formation.eps_hot = 0.35;
+  // The cube starts all cold: until its own feedback heats some gas, eps_h finds no hot
+  // neighbour and stays with the particle (counted), so both paths are exercised.
+  GasParticles gas = make_cube(10, 1e-24, 1e4, 1e-3, units);
+  Engine e(c, std::move(gas));
+  const double e0 = thermal_kinetic_reservoir(e);
+  e.initialise();
+  const double e_sn = c.star_formation.energy_per_mass(units);
+  for (int s = 0; s < 30; ++s) {
+    e.step();
+    const auto& t = e.star_formation_last_step();
+    const double expected = e_sn * t.mass_formed;
+    EXPECT_NEAR(t.energy_hot, 0.35 * expected, 1e-12 * expected);
+    EXPECT_NEAR(t.energy_reservoir, 0.4 * expected, 1e-12 * expected);
+    EXPECT_NEAR(t.energy_own, 0.25 * expected, 1e-12 * expected);
+  }
+  const auto& total = e.star_formation_total();
+  ASSERT_GT(total.mass_formed, 0.0);
+  // What the particles hold now = what they held + injected - locked in stars, up to the
+  // hydro integration error, which is tiny next to the injected energy.
+  const double balance = thermal_kinetic_reservoir(e) - e0 - total.energy_injected() + total.thermal_locked;
+  EXPECT_LT(std::fabs(balance), 1e-4 * total.energy_injected()) << balance;
+}
+
+TEST(Feedback, WithoutColdAndHotSharesItIsPureThermalFeedback) {
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  c.star_formation.energy_per_solar_mass_erg = 4e48;
+  Engine e(c, make_cube(10, 1e-24, 1e4, 1e-3, units));
+  const double e0 = thermal_kinetic_reservoir(e);
+  e.initialise();
+  for (int s = 0; s < 10; ++s) e.step();
+  const auto& total = e.star_formation_total();
+  ASSERT_GT(total.mass_formed, 0.0);
+  EXPECT_EQ(total.energy_hot, 0.0);
+  EXPECT_EQ(total.energy_reservoir, 0.0);
+  EXPECT_EQ(total.promotions, 0);
+  EXPECT_NEAR(total.energy_own, c.star_formation.energy_per_mass(units) * total.mass_formed, 1e-12 * total.energy_own);
+  for (double r : e.gas().reservoir) EXPECT_EQ(r, 0.0);
+  const double balance = thermal_kinetic_reservoir(e) - e0 - total.energy_own + total.thermal_locked;
+  EXPECT_LT(std::fabs(balance), 1e-4 * total.energy_own) << balance;
+}
+
+// ---- Reproducibility -----------------------------------------------------------------------
+
+TEST(Feedback, OneAndTwoThreadsGiveBitwiseIdenticalResults) {
+  const Units units = kpc_units();
+  auto run = [&](int threads) {
+    RunConfig c = sf_config(threads);
+    c.star_formation.energy_per_solar_mass_erg = 4e48;
+    c.star_formation.eps_cold = 0.4;
+    c.star_formation.eps_hot = 0.4;
+    c.star_formation.efficiency = 1.0;  // spawn and dissolve within the run
+    auto e = std::make_unique<Engine>(c, make_cube(8, 1e-24, 1e4, 1e-3, units));
+    e->initialise();
+    for (int s = 0; s < 60; ++s) e->step();
+    return e;
+  };
+  const auto a = run(1), b = run(2);
+  const auto& ta = a->star_formation_total();
+  EXPECT_GT(ta.mass_formed, 0.0);
+  ASSERT_EQ(a->gas().size(), b->gas().size());
+  ASSERT_EQ(a->dark_matter().size(), b->dark_matter().size());
+  EXPECT_EQ(a->gas().id, b->gas().id);
+  EXPECT_EQ(a->gas().mass, b->gas().mass);
+  EXPECT_EQ(a->gas().u_full, b->gas().u_full);
+  EXPECT_EQ(a->gas().mass_stars_hidden, b->gas().mass_stars_hidden);
+  EXPECT_EQ(a->gas().reservoir, b->gas().reservoir);
+  EXPECT_EQ(a->gas().promoted, b->gas().promoted);
+  for (std::size_t i = 0; i < a->gas().size(); ++i) ASSERT_EQ(a->gas().x[i], b->gas().x[i]);
+  EXPECT_EQ(a->dark_matter().mass, b->dark_matter().mass);
+  EXPECT_EQ(ta.energy_hot, b->star_formation_total().energy_hot);
+}
+
+}  // namespace
+}  // namespace fountain
