@@ -6,7 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 #include <numbers>
+#include <tuple>
 #include <vector>
 
 #include "TestSetups.hpp"
@@ -318,6 +320,130 @@ TEST(Feedback, WithoutColdAndHotSharesItIsPureThermalFeedback) {
   EXPECT_LT(std::fabs(balance), 1e-4 * total.energy_own) << balance;
 }
 
+// ---- Promotion ---------------------------------------------------------------------------
+
+// A cold clump (1e-24 g cm^-3, 1e4 K) in hot gas (1e-26 g cm^-3, T_hot) in a periodic box,
+// everything at rest but the clump's central particle, which holds hidden stars and a
+// reservoir worth `target_k` kelvin. Star formation is on with zero efficiency, so only the
+// reservoir acts. Returns the engine after its first (t = 0) step and the particle's id.
+struct PromotionCase {
+  std::unique_ptr<Engine> engine;
+  std::uint64_t id = 0;
+  double u_before = 0.0, hidden = 0.0, reservoir = 0.0;
+  Vec3 momentum_before;
+};
+
+PromotionCase promotion_case(double t_hot, double target_k) {
+  const Units units = kpc_units();
+  RunConfig c = sf_config();
+  c.space.periodic = true;
+  c.space.box_size = {kSide, kSide, kSide};
+  c.star_formation.efficiency = 0.0;
+  c.star_formation.energy_per_solar_mass_erg = 4e48;
+  c.star_formation.eps_cold = 0.5;
+  constexpr double radius = 3.0;
+  GasParticles g;
+  auto add = [&](const Vec3& x, double m, double u) {
+    const std::size_t k = g.size();
+    g.resize(k + 1);
+    g.id[k] = k + 1;
+    g.mass[k] = m;
+    g.x[k] = x;
+    g.u[k] = g.u_full[k] = u;
+  };
+  const auto hot = ics::bcc_lattice({0, 0, 0}, {kSide, kSide, kSide}, 12, 12, 12);
+  const double m_hot = 1e-26 / units.density_cgs() * kSide * kSide * kSide / static_cast<double>(hot.size());
+  for (const Vec3& x : hot)
+    if (!central(x, radius)) add(x, m_hot, energy_of(t_hot, units));
+  const Vec3 lo = kCentre - Vec3{radius, radius, radius};
+  const auto cold = ics::bcc_lattice(lo, {2 * radius, 2 * radius, 2 * radius}, 9, 9, 9);
+  const double m_cold = 1e-24 / units.density_cgs() * std::pow(2 * radius, 3) / static_cast<double>(cold.size());
+  std::size_t target = 0;
+  double best = 1e30;
+  for (const Vec3& x : cold)
+    if (central(x, radius)) {
+      add(x, m_cold, energy_of(1e4, units));
+      const double d = norm(x - kCentre);
+      if (d < best) best = d, target = g.size() - 1;
+    }
+  PromotionCase pc;
+  pc.id = g.id[target];
+  pc.hidden = 0.2 * m_cold;
+  g.mass_stars_hidden[target] = pc.hidden;
+  g.mass[target] = 0.8 * m_cold;
+  g.mass_initial[target] = m_cold;
+  g.v[target] = g.v_full[target] = Vec3{10.0, -5.0, 2.0};
+  pc.u_before = g.u[target];
+  pc.reservoir = g.mass[target] * (energy_of(target_k, units) - pc.u_before);
+  g.reservoir[target] = pc.reservoir;
+  pc.engine = std::make_unique<Engine>(c, std::move(g));
+  pc.momentum_before = pc.engine->totals().momentum;
+  pc.engine->initialise();
+  return pc;
+}
+
+std::size_t index_of(const GasParticles& g, std::uint64_t id) {
+  return static_cast<std::size_t>(std::find(g.id.begin(), g.id.end(), id) - g.id.begin());
+}
+
+TEST(Promotion, ThresholdIsFiftyTStarOrTwiceTheHotNeighboursWhicheverIsHigher) {
+  // Hot gas at 5e5 K: 2 <T_hot> = 1e6 K < 50 T* = 2e6 K rules; at 3e6 K, 2 <T_hot> = 6e6 K does.
+  for (const auto& [t_hot, target, promoted] : std::vector<std::tuple<double, double, bool>>{
+           {5e5, 1.8e6, false}, {5e5, 2.2e6, true},     // 50 T* rules
+           {3e6, 5.5e6, false}, {3e6, 6.5e6, true}}) {  // 2 <T_hot> = 6e6 K rules
+    const PromotionCase pc = promotion_case(t_hot, target);
+    const GasParticles& g = pc.engine->gas();
+    const std::size_t i = index_of(g, pc.id);
+    EXPECT_EQ(g.promoted[i] != 0, promoted) << "T_hot " << t_hot << ", reservoir worth " << target << " K";
+    EXPECT_EQ(g.reservoir[i] == 0.0, promoted);
+    EXPECT_EQ(pc.engine->star_formation_total().promotions, promoted ? 1 : 0);
+  }
+}
+
+TEST(Promotion, PromotedParticleSeesNoColdNeighboursAndHandsThemItsStars) {
+  const PromotionCase pc = promotion_case(3e6, 6.5e6);
+  const Engine& e = *pc.engine;
+  const GasParticles& g = e.gas();
+  const std::size_t i = index_of(g, pc.id);
+  ASSERT_EQ(g.promoted[i], 1);
+  EXPECT_EQ(g.promotion_time[i], 0.0);
+  EXPECT_NEAR(g.u[i], pc.u_before + pc.reservoir / g.mass[i], 1e-12 * g.u[i]);
+  const Units units = kpc_units();
+  const double rho_star = 5e-26 / units.density_cgs();
+  auto cold = [&](std::size_t j) { return g.rho[j] > 0.1 * rho_star && kMuFactor * g.u[j] * units.specific_energy_cgs() < 8e4; };
+  // Its density: itself and its hot neighbours only, h solved again over them.
+  const double h_inv = 1.0 / g.h[i];
+  double rho = g.mass[i] * kernel::value(0.0, h_inv);
+  double w_sum = kernel::value(0.0, h_inv);
+  int cold_neighbours = 0;
+  double hidden_elsewhere = 0.0;
+  Vec3 momentum;
+  for (std::size_t j = 0; j < g.size(); ++j) {
+    if (j != i) hidden_elsewhere += g.mass_stars_hidden[j];
+    momentum += g.v[j] * g.dynamical_mass(j);
+    if (j == i) continue;
+    const double r = norm(e.space().separation(g.x[j], g.x[i]));
+    if (r >= g.h[i]) {
+      EXPECT_EQ(g.mass_stars_hidden[j], 0.0) << "stars handed beyond h";
+      continue;
+    }
+    if (cold(j)) {
+      cold_neighbours += g.mass_stars_hidden[j] > 0.0 ? 1 : 0;
+    } else {
+      rho += g.mass[j] * kernel::value(r, h_inv);
+      w_sum += kernel::value(r, h_inv);
+      EXPECT_EQ(g.mass_stars_hidden[j], 0.0) << "stars handed to a hot neighbour";
+    }
+  }
+  EXPECT_GT(cold_neighbours, 10) << "cold neighbours holding its stars";
+  EXPECT_NEAR(kernel::volume_factor * std::pow(g.h[i], 3) * w_sum, 32.0, 1e-6) << "hot neighbour number";
+  EXPECT_NEAR(g.rho[i], rho, 1e-12 * rho);
+  EXPECT_LT(g.rho[i], 0.1 * 1e-24 / units.density_cgs()) << "density still that of the clump";
+  EXPECT_EQ(g.mass_stars_hidden[i], 0.0);
+  EXPECT_NEAR(hidden_elsewhere, pc.hidden, 1e-12 * pc.hidden);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(momentum[k], pc.momentum_before[k], 1e-9 * norm(pc.momentum_before));
+}
+
 // ---- Reproducibility -----------------------------------------------------------------------
 
 TEST(Feedback, OneAndTwoThreadsGiveBitwiseIdenticalResults) {
@@ -325,17 +451,26 @@ TEST(Feedback, OneAndTwoThreadsGiveBitwiseIdenticalResults) {
   auto run = [&](int threads) {
     RunConfig c = sf_config(threads);
     c.star_formation.energy_per_solar_mass_erg = 4e48;
-    c.star_formation.eps_cold = 0.4;
-    c.star_formation.eps_hot = 0.4;
-    c.star_formation.efficiency = 1.0;  // spawn and dissolve within the run
-    auto e = std::make_unique<Engine>(c, make_cube(8, 1e-24, 1e4, 1e-3, units));
+    // Mostly into reservoirs: the gas stays cold and star-forming until promoted, and
+    // the promoted particles' hidden stars push their cold neighbours over the spawning mass.
+    c.star_formation.eps_cold = 0.8;
+    c.star_formation.eps_hot = 0.2;
+    c.star_formation.efficiency = 1.0;
+    GasParticles gas = make_cube(8, 1e-24, 1e4, 1e-3, units);
+    // One particle in seven hot from the start: eps_h has somewhere to go.
+    for (std::size_t i = 0; i < gas.size(); i += 7) gas.u[i] = gas.u_full[i] = energy_of(1e6, units);
+    auto e = std::make_unique<Engine>(c, std::move(gas));
     e->initialise();
     for (int s = 0; s < 60; ++s) e->step();
     return e;
   };
   const auto a = run(1), b = run(2);
   const auto& ta = a->star_formation_total();
+  std::printf("1 vs 2 threads: %lld stars spawned, %lld gas dissolved, %lld promotions\n", ta.stars_spawned,
+              ta.gas_dissolved, ta.promotions);
   EXPECT_GT(ta.mass_formed, 0.0);
+  EXPECT_GT(ta.stars_spawned, 0);
+  EXPECT_GT(ta.promotions, 0);
   ASSERT_EQ(a->gas().size(), b->gas().size());
   ASSERT_EQ(a->dark_matter().size(), b->dark_matter().size());
   EXPECT_EQ(a->gas().id, b->gas().id);

@@ -381,12 +381,12 @@ void Engine::finish_star_formation() {
     step += cf.tally;
     cf.tally = {};
   }
-  if (starformation::spawn_and_dissolve(*ctx_, *sf_, next_id_)) {
-    step += sf_->step_tally;
-    sf_->step_tally = {};
-    // New stars must join the cells and dissolved gas leave them before anything else runs.
-    rebuild_now();
-  }
+  const bool changed = starformation::spawn_and_dissolve(*ctx_, *sf_, next_id_);
+  step += sf_->step_tally;
+  sf_->step_tally = {};
+  // New stars must join the cells and dissolved gas leave them before anything else runs;
+  // a promoted particle's h may have outgrown its cell.
+  if (changed || step.promotions > 0) rebuild_now();
   sf_last_step_ = step;
   sf_total_ += step;
 }

@@ -171,22 +171,41 @@ void promote(StepContext& ctx, StarFormationState& sf, std::size_t i) {
   gas.promoted[i] = 1;
   gas.promotion_time[i] = sf.time;
   ++tally.promotions;
-  // The density without the cold neighbours (h kept): the promoted particle now sees the
-  // hot phase only, and the MSPH rule reads this density from now on.
-  const double h_inv = 1.0 / gas.h[i];
-  double rho = gas.mass[i] * kernel::value(0.0, h_inv);
-  for_each_within(ctx.space, gas, gas.x[i], gas.h[i], [&](std::size_t j, const Vec3&, double r) {
-    if (j == i || !(gas.mass[j] > 0.0) || is_cold(sf, gas, j)) return;
-    rho += gas.mass[j] * kernel::value(r, h_inv);
-  });
-  gas.rho[i] = rho;
-  gas.rho_msph[i] = rho;
-  hydro::prepare_force(gas, i, ctx.hydro);
-  // Its hidden stars stay with the cold phase.
+  // Its hidden stars stay with the cold phase: the cold neighbours within h take them.
   const double hidden = gas.mass_stars_hidden[i];
   if (hidden > 0.0 &&
       share_among_neighbours(ctx, gas, i, 0.0, hidden, 0.0, [&](std::size_t j) { return is_cold(sf, gas, j); }, tally))
     gas.mass_stars_hidden[i] = 0.0;
+  // The density from the hot phase alone: h solved again over the non-cold neighbours, so
+  // the particle sees N_ngb of them (however far) and the MSPH rule reads this from now on.
+  const double n_ngb = ctx.hydro.neighbours;
+  const std::vector<std::size_t> hot =
+      nearest(ctx.space, gas, gas.x[i], i, static_cast<std::size_t>(4.0 * n_ngb), 0.0,
+              [&](std::size_t j) { return gas.mass[j] > 0.0 && !is_cold(sf, gas, j); });
+  if (hot.empty()) return;  // nothing but cold gas anywhere: keep the density it has
+  std::vector<double> r(hot.size());
+  for (std::size_t n = 0; n < hot.size(); ++n) r[n] = norm(ctx.space.separation(gas.x[hot[n]], gas.x[i]));
+  auto weighted_count = [&](double h) {
+    const double h_inv = 1.0 / h;
+    double sum = kernel::value(0.0, h_inv);
+    for (double rn : r) sum += kernel::value(rn, h_inv);
+    return kernel::volume_factor * h * h * h * sum;
+  };
+  // Bisection on h between a radius holding none of them and one holding all.
+  double lo = 0.5 * r.front(), hi = std::max(r.back(), 1e-30);
+  if (weighted_count(hi) < n_ngb) lo = hi;  // fewer than N_ngb hot particles in reach: use them all
+  for (int it = 0; it < 100 && hi - lo > 1e-12 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (weighted_count(mid) < n_ngb ? lo : hi) = mid;
+  }
+  const double h = hi, h_inv = 1.0 / h;
+  double rho = gas.mass[i] * kernel::value(0.0, h_inv);
+  for (std::size_t n = 0; n < hot.size(); ++n) rho += gas.mass[hot[n]] * kernel::value(r[n], h_inv);
+  gas.h[i] = h;
+  gas.h_msph[i] = h;
+  gas.rho[i] = rho;
+  gas.rho_msph[i] = rho;
+  hydro::prepare_force(gas, i, ctx.hydro);
 }
 
 bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t& next_id) {
