@@ -13,7 +13,9 @@ namespace {
 constexpr const char* kColumns =
     "time step mass_gas mass_dark_matter mass_hot mass_warm mass_cold mass_unbound "
     "thermal_energy kinetic_energy potential_energy total_energy radiated_energy "
-    "momentum_x momentum_y momentum_z angular_momentum_x angular_momentum_y angular_momentum_z";
+    "momentum_x momentum_y momentum_z angular_momentum_x angular_momentum_y angular_momentum_z "
+    "mass_stars mass_stars_hidden sfr_msun_per_yr mass_promoted_diffuse reservoir_energy "
+    "feedback_own feedback_reservoir feedback_hot thermal_locked";
 }
 
 StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(path) {
@@ -23,8 +25,10 @@ StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(pat
     fmt::print(file_,
                "# Fountain statistics: internal units (time, mass, energy = mass velocity^2, momentum = mass "
                "velocity). Phases as in Marri & White (2003) section 3.2: hot T > 2 T*, cold T <= 2 T* and "
-               "rho > 0.1 rho*, warm otherwise; unbound: v^2/2 + potential > 0; total_energy + "
-               "radiated_energy (by cooling, since the start) is conserved.\n");
+               "rho > 0.1 rho*, warm otherwise; unbound: v^2/2 + potential > 0; mass_promoted_diffuse: "
+               "gas promoted by feedback and not cold now. Conserved: total_energy + reservoir_energy + "
+               "radiated_energy + thermal_locked - feedback_own - feedback_reservoir - feedback_hot (all since "
+               "the start; thermal_locked is the thermal energy of gas turned into stars).\n");
     fmt::print(file_, "# {}\n", kColumns);
     std::fflush(file_);
   }
@@ -38,7 +42,9 @@ void StatisticsFile::write(double time, long long step, const analysis::Diagnost
   std::string line = fmt::format("{:.10e} {}", time, step);
   for (double x : {d.mass_gas, d.mass_dark_matter, d.mass_hot, d.mass_warm, d.mass_cold, d.mass_unbound, d.thermal,
                    d.kinetic, d.potential, d.total_energy(), d.radiated, d.momentum.x, d.momentum.y, d.momentum.z,
-                   d.angular_momentum.x, d.angular_momentum.y, d.angular_momentum.z})
+                   d.angular_momentum.x, d.angular_momentum.y, d.angular_momentum.z, d.mass_stars, d.mass_stars_hidden,
+                   d.sfr_msun_per_yr, d.mass_promoted_diffuse, d.reservoir, d.feedback_own, d.feedback_reservoir,
+                   d.feedback_hot, d.thermal_locked})
     line += fmt::format(" {:.10e}", x);
   line += '\n';
   const bool ok = std::fputs(line.c_str(), file_) >= 0;

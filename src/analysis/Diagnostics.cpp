@@ -13,22 +13,27 @@ Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, c
   Diagnostics d;
   for (std::size_t i = 0; i < gas.size(); ++i) {
     const double m = gas.mass[i];
+    const double m_dyn = gas.dynamical_mass(i);  // hidden stars move with the gas
     const double v2 = dot(gas.v[i], gas.v[i]);
     d.mass_gas += m;
+    d.mass_stars_hidden += m_dyn - m;
+    d.reservoir += gas.reservoir[i];
     const double t = temperature(gas.u[i]);
+    const bool cold = t <= 2.0 * phases.t_star_k && gas.rho[i] > 0.1 * phases.rho_star_internal;
     if (t > 2.0 * phases.t_star_k) d.mass_hot += m;
-    else if (gas.rho[i] > 0.1 * phases.rho_star_internal) d.mass_cold += m;
+    else if (cold) d.mass_cold += m;
     else d.mass_warm += m;
+    if (gas.promoted[i] && !cold) d.mass_promoted_diffuse += m;
     if (0.5 * v2 + gas.potential[i] > 0.0) d.mass_unbound += m;
     d.thermal += m * gas.u[i];
-    d.kinetic += 0.5 * m * v2;
-    d.potential += 0.5 * m * gas.potential[i];
-    d.momentum += gas.v[i] * m;
-    d.angular_momentum += cross(gas.x[i], gas.v[i]) * m;
+    d.kinetic += 0.5 * m_dyn * v2;
+    d.potential += 0.5 * m_dyn * gas.potential[i];
+    d.momentum += gas.v[i] * m_dyn;
+    d.angular_momentum += cross(gas.x[i], gas.v[i]) * m_dyn;
   }
   for (std::size_t i = 0; i < dm.size(); ++i) {
     const double m = dm.mass[i];
-    d.mass_dark_matter += m;
+    (dm.species[i] == Species::Star ? d.mass_stars : d.mass_dark_matter) += m;
     d.kinetic += 0.5 * m * dot(dm.v[i], dm.v[i]);
     d.potential += 0.5 * m * dm.potential[i];
     d.momentum += dm.v[i] * m;

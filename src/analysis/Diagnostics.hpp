@@ -24,6 +24,15 @@ struct Diagnostics {
   double mass_unbound = 0.0;         // gas with v^2/2 + potential > 0
   double thermal = 0.0, kinetic = 0.0, potential = 0.0;
   double radiated = 0.0;             // by cooling since the start: total_energy + radiated is conserved
+  // Star formation and feedback. The engine's tallies (since the start) are filled in by
+  // the caller; the rest is measured on the particles.
+  double mass_stars = 0.0;           // star particles
+  double mass_stars_hidden = 0.0;    // hidden in gas particles
+  double mass_promoted_diffuse = 0.0;  // gas promoted by feedback and not cold now (the paper's Fig 4)
+  double reservoir = 0.0;            // feedback energy held in reservoirs
+  double sfr_msun_per_yr = 0.0;      // mean since the previous line
+  double feedback_own = 0.0, feedback_reservoir = 0.0, feedback_hot = 0.0;  // injected, since the start
+  double thermal_locked = 0.0;       // thermal energy of gas turned into stars, since the start
   Vec3 momentum, angular_momentum;   // about the origin
   double total_energy() const { return thermal + kinetic + potential; }
 };

@@ -192,9 +192,23 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   if (config.output.statistics_every > 0)
     statistics = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", restart);
   const analysis::PhaseThresholds phases = analysis::PhaseThresholds::paper(config.units);
+  // The star formation rate of a line is the mean since the previous line.
+  double sf_mass_before = engine.star_formation_total().mass_formed, sf_time_before = engine.time();
+  const double msun_per_mass = config.units.mass_cgs / 1.988409870698051e33;
+  const double years_per_time = config.units.time_cgs() / 3.15576e7;
   auto write_statistics = [&] {
     analysis::Diagnostics d = analysis::measure(engine.gas(), engine.dark_matter(), temperature, phases);
     d.radiated = engine.radiated_energy();
+    const auto& sf = engine.star_formation_total();
+    const double elapsed = engine.time() - sf_time_before;
+    if (elapsed > 0.0)
+      d.sfr_msun_per_yr = (sf.mass_formed - sf_mass_before) * msun_per_mass / (elapsed * years_per_time);
+    sf_mass_before = sf.mass_formed;
+    sf_time_before = engine.time();
+    d.feedback_own = sf.energy_own;
+    d.feedback_reservoir = sf.energy_reservoir;
+    d.feedback_hot = sf.energy_hot;
+    d.thermal_locked = sf.thermal_locked;
     statistics->write(engine.time(), engine.steps(), d);
   };
   if (statistics && !restart) write_statistics();
