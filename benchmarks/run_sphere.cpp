@@ -1,6 +1,9 @@
-// Whole-run benchmark of the paper's rotating sphere (gravity, cooling, MSPH): wall time,
-// updates per second and time per task category over a fixed stretch of simulated time,
-// written as JSON. Usage: fountain_sphere_bench [-n 8000] [--threads N] [--t-end T] [--json FILE]
+// Whole-run benchmark of the paper's rotating sphere (gravity, cooling, MSPH, optionally star
+// formation and MFB): wall time, updates per second and time per task category over a fixed
+// stretch of simulated time, written as JSON. Usage: fountain_sphere_bench [-n 8000]
+// [--threads N] [--t-end T] [--measure-from T0] [--star-formation --eps-cold 0.4 --eps-hot 0.4]
+// [--json FILE]; with --measure-from the run before T0 is not timed (star formation starts
+// only once the disc has formed).
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -18,7 +21,8 @@ int main(int argc, char** argv) {
   CLI::App app{"Fountain rotating-sphere benchmark"};
   int threads = 1, per_species = 8000;
   double t_end = 5.0e-5, softening = 0.001;
-  bool msph = true, cooling = true;
+  bool msph = true, cooling = true, star_formation = false;
+  double measure_from = 0.0, eps_cold = 0.4, eps_hot = 0.4;
   std::string json_path;
   app.add_option("-n,--particles", per_species, "particles per species");
   app.add_option("-t,--threads", threads);
@@ -27,6 +31,10 @@ int main(int argc, char** argv) {
   app.add_option("--msph", msph);
   app.add_option("--cooling", cooling);
   app.add_option("--json", json_path);
+  app.add_flag("--star-formation", star_formation, "star formation and MFB on");
+  app.add_option("--eps-cold", eps_cold);
+  app.add_option("--eps-hot", eps_hot);
+  app.add_option("--measure-from", measure_from, "time from which steps are timed (internal units)");
   CLI11_PARSE(app, argc, argv);
 
   ics::RotatingSphereParams sp;
@@ -43,15 +51,22 @@ int main(int argc, char** argv) {
   c.gravity.softening_dark_matter = softening;
   c.gravity.softening_gas = 0.5 * softening;
   c.cooling.enabled = cooling;
+  c.star_formation.enabled = star_formation;
+  c.star_formation.eps_cold = eps_cold;
+  c.star_formation.eps_hot = eps_hot;
   const std::size_t n = ic.gas.size() + ic.dm.size();
 
   const auto t0 = std::chrono::steady_clock::now();
   Engine e(c, std::move(ic.gas), std::move(ic.dm));
-  e.set_record_timeline(true);
   e.initialise();
+  while (!e.finished() && e.time() < measure_from) e.step();
+  e.set_record_timeline(true);
   const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::map<std::string, double> category_s;
   double tasks_wall = 0, tasks_busy = 0, updates = 0;
+  const long long steps_before = e.steps();
+  const double time_before = e.time();
+  const double stars_before = e.star_formation_total().mass_formed;
   const auto t1 = std::chrono::steady_clock::now();
   while (!e.finished()) {
     const StepInfo s = e.step();
@@ -74,10 +89,14 @@ int main(int argc, char** argv) {
   const double thread_time = wall * e.threads();
   const std::string json = fmt::format(
       "{{\"problem\": \"rotating_sphere\", \"particles_per_species\": {}, \"particles\": {}, \"threads\": {}, "
-      "\"msph\": {}, \"cooling\": {}, \"t_end\": {}, \"setup_s\": {:.3f}, \"wall_s\": {:.3f}, \"steps\": {}, "
+      "\"msph\": {}, \"cooling\": {}, \"star_formation\": {}, \"eps_cold\": {}, \"eps_hot\": {}, "
+      "\"measured_from\": {}, \"t_end\": {}, \"mass_formed_measured\": {:.4g}, \"promotions\": {}, "
+      "\"setup_s\": {:.3f}, \"wall_s\": {:.3f}, \"steps\": {}, "
       "\"updates_per_s\": {:.4g}, \"task_seconds_by_category\": {{{}\"outside_tasks\": {:.4f}}}, "
       "\"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}}}\n",
-      per_species, n, e.threads(), msph, cooling, t_end, setup, wall, e.steps(), updates / wall, categories,
+      per_species, n, e.threads(), msph, cooling, star_formation, eps_cold, eps_hot, time_before, t_end,
+      e.star_formation_total().mass_formed - stars_before, e.star_formation_total().promotions, setup, wall,
+      e.steps() - steps_before, updates / wall, categories,
       thread_time - tasks_busy, tasks_wall > 0 ? tasks_busy / thread_time : 0.0,
       static_cast<double>(ru.ru_maxrss) * 1024.0 / static_cast<double>(n));
   fmt::print("{}", json);

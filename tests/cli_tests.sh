@@ -119,17 +119,29 @@ with h5py.File('zero.hdf5', 'w') as f:
     "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
     head -1 restart.txt
     "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
-  restart_after_kill_gravity)
+  restart_after_kill_gravity|restart_after_kill_star_formation)
     # As restart_after_kill, with everything a restart must carry beyond the gas: a rotating
     # sphere of gas and dark matter, self-gravity (open boundaries), cooling and MSPH, on
     # individual timesteps (the collapse spreads the particles over several bins). Both runs
     # write restart files every 25 steps (writing one recuts the cells, so A must write them
     # too); B is killed with SIGKILL after one written at step 100 or later, and restarted.
+    # The star formation variant runs on into the disc's star formation with MFB on: hidden
+    # stars, reservoirs, promotions, star particles and the tallies must all come back.
     "$bin" ic sphere -n 300 -o sphere.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
+    t_end=4e-4 extra=""
+    if [ "$case_name" = restart_after_kill_star_formation ]; then
+      t_end=6e-4
+      extra="star_formation:
+  enabled: true
+feedback:
+  eps_cold: 0.4
+  eps_hot: 0.4"
+    fi
     gparams() {  # gparams OUT_DIR
       cat > params.yml <<EOT
+$extra
 run:
-  t_end: 4e-4
+  t_end: $t_end
 initial_conditions:
   file: sphere.hdf5
   periodic: false
@@ -170,6 +182,13 @@ EOT
 import h5py, sys
 with h5py.File('outA/snapshot_0001.hdf5', 'r') as f:
     sys.exit(0 if f['PartType1/Coordinates'].shape[0] > 0 else 1)" || fail "no dark matter in the snapshot"
+    if [ "$case_name" = restart_after_kill_star_formation ]; then
+      "$python" -c "
+import h5py, sys
+with h5py.File('outA/snapshot_0001.hdf5', 'r') as f:
+    sys.exit(0 if f['Header'].attrs['NumPart_ThisFile'][4] > 0 and f['PartType0/Promoted'][:].sum() > 0 else 1)" ||
+        fail "the run formed no star particle or promoted nothing: the test would prove little"
+    fi
     "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
   corrupted_restart)
     params good.hdf5 out "restart:

@@ -12,8 +12,8 @@
 #
 # N: particles per species (default 4000; the softening is scaled as N^(-1/3) from 1.5 kpc/h
 # at 4000). T_END: Gyr (default 2, h = 1). THREADS: default 2. Runs go to
-# examples/rotating_sphere/output/feedback_<N>/<run>/; a finished run is not redone, a
-# killed one continues from its restart file.
+# $OUT/<run>/ (default examples/rotating_sphere/output/feedback_<N>); a finished run is not
+# redone (delete its folder to redo it), a killed one continues from its restart file.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
@@ -22,7 +22,7 @@ bin="$root/build/fountain"
 n=${N:-4000}
 t_end_gyr=${T_END:-2}
 threads=${THREADS:-2}
-out="$here/output/feedback_$n"
+out=${OUT:-$here/output/feedback_$n}
 mkdir -p "$out"
 py=/usr/bin/python3
 # Internal time unit: Mpc/(km/s) = 977.8 Gyr (h = 1).
