@@ -128,9 +128,9 @@ with h5py.File('zero.hdf5', 'w') as f:
     # The star formation variant runs on into the disc's star formation with MFB on: hidden
     # stars, reservoirs, promotions, star particles and the tallies must all come back.
     "$bin" ic sphere -n 300 -o sphere.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
-    t_end=4e-4 extra=""
+    t_end=4e-4 extra="" kill_after='[1-9][0-9][0-9]+'
     if [ "$case_name" = restart_after_kill_star_formation ]; then
-      t_end=6e-4
+      t_end=6e-4 kill_after='1[0-9][0-9][0-9]'  # step 1000-1999: stars, reservoirs, promotions exist
       extra="star_formation:
   enabled: true
 feedback:
@@ -168,7 +168,7 @@ EOT
     "$bin" run paramsB.yml > runB.txt 2>&1 &
     pid=$!
     n=0
-    until grep -Eq 'restart file .* at step ([1-9][0-9][0-9]+)$' runB.txt || ! kill -0 "$pid" 2>/dev/null || [ $n -ge 3000 ]; do
+    until grep -Eq "restart file .* at step ($kill_after)\$" runB.txt || ! kill -0 "$pid" 2>/dev/null || [ $n -ge 3000 ]; do
       sleep 0.01; n=$((n + 1))
     done
     kill -9 "$pid" 2>/dev/null || true
