@@ -34,22 +34,26 @@ def main():
             print(f"\n{p}: parallel efficiency on 2 threads {one['wall_s'] / (2 * two['wall_s']):.0%} (wall), "
                   f"{one['full_step_us_per_particle'] / (2 * two['full_step_us_per_particle']):.0%} (full steps)")
 
-    if spheres:
-        print("\n| rotating sphere | particles | threads | wall (s) | steps | updates/s | hydro | gravity | cooling "
-              "| integration | outside tasks | in tasks |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|")
-        for r in spheres:
+    for label, group in (("rotating sphere", [r for r in spheres if not r.get("star_formation")]),
+                         ("rotating sphere, star formation + MFB", [r for r in spheres if r.get("star_formation")])):
+        if not group:
+            continue
+        print(f"\n| {label} | particles | threads | wall (s) | steps | updates/s | hydro | gravity | cooling "
+              "| star formation | feedback | integration | outside tasks | in tasks |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in group:
             c = r["task_seconds_by_category"]
             total = sum(c.values())
-            share = {k: f"{100 * v / total:.0f}%" for k, v in c.items()}
+            share = {k: f"{100 * v / total:.0f}%" if 100 * v / total >= 1 else f"{100 * v / total:.1f}%"
+                     for k, v in c.items()}
             print(f"| {r['particles_per_species']} per species | {r['particles']:,} | {r['threads']} | {r['wall_s']:.1f} "
                   f"| {r['steps']} | {r['updates_per_s']:.3g} | {share.get('hydro', '-')} | {share.get('gravity', '-')} "
-                  f"| {share.get('cooling', '-')} | {share.get('integration', '-')} | {share.get('outside_tasks', '-')} "
+                  f"| {share.get('cooling', '-')} | {share.get('star_formation', '-')} | {share.get('feedback', '-')} "
+                  f"| {share.get('integration', '-')} | {share.get('outside_tasks', '-')} "
                   f"| {100 * r['tasks_busy_share_of_thread_time']:.1f}% |")
-        by_t = {r["threads"]: r for r in spheres}
+        by_t = {r["threads"]: r for r in group}
         if 1 in by_t and 2 in by_t:
-            print(f"\nrotating sphere: parallel efficiency on 2 threads {by_t[1]['wall_s'] / (2 * by_t[2]['wall_s']):.0%}")
-
+            print(f"\n{label}: parallel efficiency on 2 threads {by_t[1]['wall_s'] / (2 * by_t[2]['wall_s']):.0%}")
 
 if __name__ == "__main__":
     main()

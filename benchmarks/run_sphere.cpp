@@ -77,7 +77,7 @@ int main(int argc, char** argv) {
     for (std::size_t t = 0; t < records.size(); ++t) {
       const auto& r = records[t];
       if (r.end_ns <= r.start_ns) continue;
-      category_s[e.task_types().registry[e.graph().task(static_cast<int>(t)).type].category] +=
+      category_s[e.task_types().registry[e.records_graph().task(static_cast<int>(t)).type].category] +=
           1e-9 * static_cast<double>(r.end_ns - r.start_ns);
     }
   }

@@ -220,7 +220,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
       fmt::print(stderr, "step {:6d}  t = {:<12.6g} dt = {:<11.4g} active = {:<8d} {}wall = {:.3f} ms\n", s.step,
                  s.time, s.dt, s.active, s.rebuilt ? "rebuilt " : "", 1e3 * s.wall_s);
     if (dump_timeline && s.active > 0 && s.step % config.output.dump_timeline_every == 0)
-      tasks::write_timeline_csv(engine.graph(), engine.task_types().registry, engine.last_records(), 0, s.step,
+      tasks::write_timeline_csv(engine.records_graph(), engine.task_types().registry, engine.last_records(), 0, s.step,
                                 fmt::format("{}/timeline_step{:06d}.csv", config.output.directory, s.step));
     if (statistics && (engine.steps() % config.output.statistics_every == 0 || engine.finished())) write_statistics();
     if (engine.ti_current() == ti_out && !engine.finished()) {

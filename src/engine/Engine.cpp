@@ -61,6 +61,7 @@ void Engine::setup_star_formation() {
     sf_->temperature = [factor](double u) { return factor * u; };
     sf_->energy_at = [factor](double t) { return t / factor; };
   }
+  sf_->u_cold_max = sf_->energy_at(2.0 * p.temperature_threshold);
   for (auto i : gas_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
   for (auto i : dm_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
 }
@@ -125,6 +126,11 @@ void Engine::remove_dissolved() {
 }
 
 void Engine::build_graph() {
+  // Keep the graph the last records index into, for timelines written after this rebuild.
+  if (!records_.empty() && !records_stale_) {
+    records_graph_ = std::move(graph_);
+    records_stale_ = true;
+  }
   graph_ = tasks::TaskGraph();
   const auto& leaves = space_.leaves();
   const std::size_t ncells = space_.cells().size();
@@ -304,6 +310,7 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.feedback_apply) starformation::apply_feedback(ctx, *sf, leaves);
   };
   executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr, &step_tasks_);
+  records_stale_ = false;
   collect_radiated();
   if (info) {
     info->tasks_wall_s += 1e-9 * static_cast<double>(executor_.last_wall_ns());

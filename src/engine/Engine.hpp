@@ -83,6 +83,9 @@ class Engine {
   const TaskTypes& task_types() const { return types_; }
   const tasks::TaskGraph& graph() const { return graph_; }
   const std::vector<tasks::TaskRecord>& last_records() const { return records_; }
+  // The graph last_records() index into: the current one, or the one the last step ran if
+  // the cells were recut since (after star particles were spawned, say).
+  const tasks::TaskGraph& records_graph() const { return records_stale_ ? records_graph_ : graph_; }
   int threads() const { return executor_.threads(); }
   // Energy radiated by cooling since the start of the run (internal units), for energy
   // conservation checks; set_radiated_energy continues it after a restart.
@@ -131,6 +134,8 @@ class Engine {
   std::unique_ptr<cooling::CoolingTable> cooling_table_;
   std::unique_ptr<cooling::RadiativeCooling> cooling_;
   std::vector<tasks::TaskRecord> records_;
+  tasks::TaskGraph records_graph_;  // the graph of records_ once graph_ was rebuilt
+  bool records_stale_ = false;
   std::vector<char> cell_active_;
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
   std::vector<int> step_tasks_;                  // the tasks the current step runs

@@ -12,8 +12,10 @@ namespace fountain::starformation {
 
 namespace {
 
+// The feedback phase test on u rather than T: T(u) is monotonic, so T < 2 T* is u below the
+// energy of 2 T*, and the searches need no temperature solve per candidate.
 bool is_cold(const StarFormationState& sf, const GasParticles& gas, std::size_t j) {
-  return sf.law.feedback_cold(gas.rho[j], sf.temperature(gas.u[j]));
+  return gas.rho[j] > 0.1 * sf.law.rho_threshold && gas.u[j] < sf.u_cold_max;
 }
 
 // Gas particle j takes gas mass dm_gas and hidden stellar mass dm_hidden moving at v_src

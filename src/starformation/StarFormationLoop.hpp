@@ -32,6 +32,7 @@ struct StarFormationState {
   double energy_per_mass = 0.0;                      // e_sn per unit internal mass formed
   std::function<double(double)> temperature;         // T (K) of specific energy u
   std::function<double(double)> energy_at;           // u of temperature T (K)
+  double u_cold_max = 0.0;                           // energy_at(2 T*): feedback's cold phase is below
   std::vector<CellFeedback> cells;                   // indexed by cell
   StarFormationTally step_tally;                     // the feedback task's and spawning's share
   double time = 0.0;                                 // current simulation time (for promotion times)
