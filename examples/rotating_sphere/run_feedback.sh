@@ -7,7 +7,7 @@
 #   G09-G12: eps_c = eps_h = 0.4, MSPH, M = 1e9 .. 1e12 Msun/h, radius and softening scaled
 #            as M^(1/3) (G12 is R04).
 #
-#   sh examples/rotating_sphere/run_feedback.sh                     # all nine, then the plots
+#   sh examples/rotating_sphere/run_feedback.sh                     # all, then the plots
 #   RUNS="R02 R04" N=2000 T_END=0.6 sh examples/rotating_sphere/run_feedback.sh
 #
 # N: particles per species (default 4000; the softening is scaled as N^(-1/3) from 1.5 kpc/h
@@ -29,7 +29,8 @@ py=/usr/bin/python3
 t_end=$($py -c "print(f'{$t_end_gyr / 977.8:.6e}')")
 dt_out=$($py -c "print(f'{$t_end_gyr / 977.8 / 10:.6e}')")
 
-for run in ${RUNS:-R01 R02 R03 R04 R05 G09 G10 G11 G12}; do
+# G12 is R04 (the default list runs it once, as R04, and plots it in both figures).
+for run in ${RUNS:-R01 R02 R03 R04 R05 G09 G10 G11}; do
   mass=1e12 msph=true eps_c=0.4 eps_h=0.4
   case $run in
     R01) eps_c=0 eps_h=0 msph=false ;;
@@ -100,4 +101,5 @@ plot() {
     --title "$name, $n particles per species"
 }
 plot feedback_R R01 R02 R03 R04 R05
+if [ -f "$out/R04/statistics.txt" ] && [ ! -e "$out/G12" ]; then ln -s R04 "$out/G12"; fi
 plot feedback_G G09 G10 G11 G12
