@@ -103,3 +103,4 @@ plot() {
 plot feedback_R R01 R02 R03 R04 R05
 if [ -f "$out/R04/statistics.txt" ] && [ ! -e "$out/G12" ]; then ln -s R04 "$out/G12"; fi
 plot feedback_G G09 G10 G11 G12
+$py "$here/compare_feedback.py" "$out" | tee "$out/comparison.md"
