@@ -16,6 +16,7 @@
 #include "hydro/Kernel.hpp"
 #include "ics/Lattice.hpp"
 #include "starformation/StarFormationLaw.hpp"
+#include "starformation/StarFormationLoop.hpp"
 
 namespace fountain {
 namespace {
@@ -263,6 +264,35 @@ TEST(StarFormationConservation, SpawningAndDissolvingConserveMassMomentumAndEner
     EXPECT_GT(s.id[i], n_gas);
     EXPECT_EQ(s.birth_time[i], e.time());
   }
+}
+
+// A gas particle part-way through a cooling step (its integrated energy already below the
+// predicted one, its rate solved to end the step at the 1e4 K floor) takes in much colder gas
+// from a dissolving neighbour: energy, mass and momentum are conserved, and neither the
+// particle now nor the end of its step goes below zero (it once did, in the R02 run).
+TEST(StarFormationConservation, MixingInColderGasKeepsACoolingParticlePositive) {
+  GasParticles g;
+  g.resize(1);
+  g.mass[0] = 2.0;
+  g.u[0] = 586.0;
+  g.u_full[0] = 420.0;
+  const double remaining = 1.0, floor = 210.0;  // time to the step's end; the floor energy
+  g.du_dt_cool[0] = g.du_dt[0] = (floor - g.u[0]) / remaining;
+  g.v[0] = g.v_full[0] = Vec3{3.0, 0.0, 0.0};
+  starformation::StarFormationTally tally;
+  const double m_in = 6.0, u_in = 20.0;
+  const Vec3 v_in{-1.0, 2.0, 0.0};
+  const double e_before = g.mass[0] * g.u[0] + 0.5 * g.mass[0] * dot(g.v[0], g.v[0]) + m_in * u_in +
+                          0.5 * m_in * dot(v_in, v_in);
+  const Vec3 p_before = g.v[0] * g.mass[0] + v_in * m_in;
+  starformation::absorb(g, 0, m_in, 0.0, v_in, u_in, 0.0, tally);
+  EXPECT_DOUBLE_EQ(g.mass[0], 8.0);
+  const double e_after = g.mass[0] * g.u[0] + 0.5 * g.mass[0] * dot(g.v[0], g.v[0]);
+  EXPECT_NEAR(e_after, e_before, 1e-12 * e_before);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(g.v[0][k] * g.mass[0], p_before[k], 1e-12 * norm(p_before));
+  EXPECT_GT(g.u[0], 0.0);
+  EXPECT_GT(g.u_full[0], 0.0);
+  EXPECT_GT(g.u[0] + g.du_dt[0] * remaining, 0.0) << "the rest of the step would cool below zero";
 }
 
 // ---- Feedback ------------------------------------------------------------------------------

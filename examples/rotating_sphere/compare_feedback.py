@@ -2,7 +2,10 @@
 """Compares runs R01-R05 and G09-G12 of run_feedback.sh with what Marri & White (2003)
 report in their section 3.3, point by point, as a Markdown table (at the runs' last line).
 
-    /usr/bin/python3 examples/rotating_sphere/compare_feedback.py examples/rotating_sphere/output/feedback_2000
+    /usr/bin/python3 examples/rotating_sphere/compare_feedback.py examples/rotating_sphere/output/feedback_2000 [T_GYR]
+
+With T_GYR, every run is read at its last line at or before that time (runs of different
+lengths compare at a common time).
 """
 import os
 import sys
@@ -11,12 +14,12 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from plot_star_formation import read_statistics, summary  # noqa: E402
 
 
-def main(folder):
+def main(folder, at_gyr=None):
     runs = {}
     for name in ("R01", "R02", "R03", "R04", "R05", "G09", "G10", "G11", "G12"):
         path = os.path.join(folder, name, "statistics.txt")
         if os.path.exists(path):
-            runs[name] = summary(read_statistics(path))
+            runs[name] = summary(read_statistics(path), at_gyr)
     rows = []
 
     def row(claim, ours, holds):
@@ -49,11 +52,12 @@ def main(folder):
         unbound = [runs[n]["unbound"] for n in g]
         row("less massive objects lose a larger fraction of their gas (unbound)",
             ", ".join(f"{n} {u:.3f}" for n, u in zip(g, unbound)), all(a >= b for a, b in zip(unbound, unbound[1:])))
-    t = max((r["t_gyr"] for r in runs.values()), default=0.0)
-    print(f"At t = {t:.2f} Gyr (fractions of each run's baryons):\n")
+    times = sorted({round(r["t_gyr"], 2) for r in runs.values()})
+    print(f"At t = {', '.join(f'{t:.2f}' for t in times)} Gyr (fractions of each run's baryons):\n")
     print("| the paper (section 3.3) | these runs | holds |\n|---|---|---|")
     print("\n".join(rows))
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "examples/rotating_sphere/output/feedback_2000")
+    main(sys.argv[1] if len(sys.argv) > 1 else "examples/rotating_sphere/output/feedback_2000",
+         float(sys.argv[2]) if len(sys.argv) > 2 else None)

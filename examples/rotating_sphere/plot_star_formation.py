@@ -37,18 +37,22 @@ def baryons(s):
     return s["mass_gas"] + s["mass_stars"] + s["mass_stars_hidden"]
 
 
-def summary(s):
-    """Figures at the last line: fractions of the baryons and the total stellar mass."""
-    b = baryons(s)[-1]
-    stars = s["mass_stars"][-1] + s["mass_stars_hidden"][-1]
+def summary(s, at_gyr=None):
+    """Figures at the last line (or the last at or before at_gyr): fractions of the baryons
+    and the total stellar mass."""
+    k = len(s["time"]) - 1
+    if at_gyr is not None:
+        k = int(np.searchsorted(s["time"] * GYR_PER_TIME, at_gyr * (1 + 1e-9), side="right")) - 1
+    b = baryons(s)[k]
+    stars = s["mass_stars"][k] + s["mass_stars_hidden"][k]
     return {
-        "t_gyr": s["time"][-1] * GYR_PER_TIME,
+        "t_gyr": s["time"][k] * GYR_PER_TIME,
         "stars": stars / b,
-        "hot": s["mass_hot"][-1] / b,
-        "warm": s["mass_warm"][-1] / b,
-        "cold": s["mass_cold"][-1] / b,
-        "unbound": s["mass_unbound"][-1] / b,
-        "promoted": s["mass_promoted_diffuse"][-1] / b,
+        "hot": s["mass_hot"][k] / b,
+        "warm": s["mass_warm"][k] / b,
+        "cold": s["mass_cold"][k] / b,
+        "unbound": s["mass_unbound"][k] / b,
+        "promoted": s["mass_promoted_diffuse"][k] / b,
         "stellar_mass": stars,
     }
 
@@ -60,6 +64,7 @@ def main():
     ap.add_argument("-o", "--output", default="star_formation.png")
     ap.add_argument("--table", help="also write a Markdown table of the last line's fractions here")
     ap.add_argument("--title", default="")
+    ap.add_argument("--at", type=float, help="table at this time (Gyr; default: each run's last line)")
     a = ap.parse_args()
     labels = a.labels if a.labels else [os.path.basename(os.path.normpath(r)) for r in a.runs]
     if len(labels) != len(a.runs):
@@ -94,7 +99,7 @@ def main():
     fig.savefig(a.output, dpi=110)
     print(f"wrote {a.output}")
 
-    rows = [(label, summary(s)) for s, label in zip(stats, labels)]
+    rows = [(label, summary(s, a.at)) for s, label in zip(stats, labels)]
     text = ("| run | t [Gyr] | stars | cold | warm | hot | unbound | promoted, diffuse | M* [Msun/h] |\n"
             "|---|---|---|---|---|---|---|---|---|\n")
     for label, r in rows:

@@ -98,9 +98,9 @@ plot() {
   [ -n "$dirs" ] || return 0
   # shellcheck disable=SC2086
   $py "$here/plot_star_formation.py" $dirs --labels $labels -o "$out/$name.png" --table "$out/$name.md" \
-    --title "$name, $n particles per species"
+    --title "$name, $n particles per species" --at "$t_end_gyr"
 }
 plot feedback_R R01 R02 R03 R04 R05
 if [ -f "$out/R04/statistics.txt" ] && [ ! -e "$out/G12" ]; then ln -s R04 "$out/G12"; fi
 plot feedback_G G09 G10 G11 G12
-$py "$here/compare_feedback.py" "$out" | tee "$out/comparison.md"
+$py "$here/compare_feedback.py" "$out" "$t_end_gyr" | tee "$out/comparison.md"

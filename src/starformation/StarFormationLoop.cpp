@@ -18,28 +18,6 @@ bool is_cold(const StarFormationState& sf, const GasParticles& gas, std::size_t 
   return gas.rho[j] > 0.1 * sf.law.rho_threshold && gas.u[j] < sf.u_cold_max;
 }
 
-// Gas particle j takes gas mass dm_gas and hidden stellar mass dm_hidden moving at v_src
-// with specific energy u_src, plus `heat`. Mass and momentum are conserved exactly; the
-// kinetic energy the inelastic merger loses becomes heat, so the total energy is too.
-void absorb(GasParticles& gas, std::size_t j, double dm_gas, double dm_hidden, const Vec3& v_src, double u_src,
-            double heat, StarFormationTally& tally) {
-  const double m_j = gas.dynamical_mass(j), dm = dm_gas + dm_hidden;
-  const Vec3 v_new = (gas.v[j] * m_j + v_src * dm) * (1.0 / (m_j + dm));
-  const double lost = 0.5 * m_j * dot(gas.v[j], gas.v[j]) + 0.5 * dm * dot(v_src, v_src) -
-                      0.5 * (m_j + dm) * dot(v_new, v_new);
-  const double thermal = gas.mass[j] * gas.u[j] + dm_gas * u_src + heat + lost;
-  gas.mass[j] += dm_gas;
-  gas.mass_stars_hidden[j] += dm_hidden;
-  // The predicted and the integrated state move together, so neither loses the transfer.
-  const double du = thermal / gas.mass[j] - gas.u[j];
-  gas.u[j] += du;
-  gas.u_full[j] += du;
-  const Vec3 dv = v_new - gas.v[j];
-  gas.v[j] += dv;
-  gas.v_full[j] += dv;
-  tally.kinetic_to_heat += lost;
-}
-
 // Shares (dm_gas, dm_hidden, heat) of particle i among gas neighbours within h_i that pass
 // `accept`, in proportion to their kernel weight W(r_ij, h_i). False if there are none.
 template <class Accept>
@@ -67,6 +45,41 @@ bool share_among_neighbours(const StepContext& ctx, GasParticles& gas, std::size
 }
 
 }  // namespace
+
+// Gas particle j takes gas mass dm_gas and hidden stellar mass dm_hidden moving at v_src
+// with specific energy u_src, plus `heat`. Mass and momentum are conserved exactly; the
+// kinetic energy the inelastic merger loses becomes heat, so the total energy is too.
+void absorb(GasParticles& gas, std::size_t j, double dm_gas, double dm_hidden, const Vec3& v_src, double u_src,
+            double heat, StarFormationTally& tally) {
+  const double m_j = gas.dynamical_mass(j), dm = dm_gas + dm_hidden;
+  const Vec3 v_new = (gas.v[j] * m_j + v_src * dm) * (1.0 / (m_j + dm));
+  const double lost = 0.5 * m_j * dot(gas.v[j], gas.v[j]) + 0.5 * dm * dot(v_src, v_src) -
+                      0.5 * (m_j + dm) * dot(v_new, v_new);
+  const double thermal = gas.mass[j] * gas.u[j] + dm_gas * u_src + heat + lost;
+  gas.mass[j] += dm_gas;
+  gas.mass_stars_hidden[j] += dm_hidden;
+  const double u_new = thermal / gas.mass[j];
+  if (u_new >= gas.u[j]) {
+    // Heated: the predicted and the integrated state move together.
+    const double du = u_new - gas.u[j];
+    gas.u[j] += du;
+    gas.u_full[j] += du;
+  } else {
+    // Cooled by mixing with colder gas, part-way through its step: scale the integrated
+    // energy and the cooling rate with the predicted energy. Subtracting instead could take
+    // the integrated energy, or the energy the rest of the step cools to, below zero (the
+    // cooling task's implicit rate was solved from the old energy).
+    const double f = u_new / gas.u[j];
+    gas.u[j] = u_new;
+    gas.u_full[j] *= f;
+    gas.du_dt[j] += (f - 1.0) * gas.du_dt_cool[j];
+    gas.du_dt_cool[j] *= f;
+  }
+  const Vec3 dv = v_new - gas.v[j];
+  gas.v[j] += dv;
+  gas.v_full[j] += dv;
+  tally.kinetic_to_heat += lost;
+}
 
 void form_stars(StepContext& ctx, StarFormationState& sf, int c) {
   GasParticles& gas = ctx.gas;

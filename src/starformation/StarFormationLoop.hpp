@@ -47,6 +47,12 @@ void find_hot_neighbours(StepContext& ctx, StarFormationState& sf, int c);
 // of reservoirs that can reach T_prom.
 void apply_feedback(StepContext& ctx, StarFormationState& sf, const std::vector<int>& leaves);
 
+// Gas particle j takes gas mass dm_gas and hidden stellar mass dm_hidden moving at v_src
+// with specific energy u_src, plus `heat` (energy). Mass and momentum are conserved exactly,
+// and the predicted energy too (the kinetic energy the inelastic merger loses becomes heat).
+void absorb(GasParticles& gas, std::size_t j, double dm_gas, double dm_hidden, const Vec3& v_src, double u_src,
+            double heat, StarFormationTally& tally);
+
 // Promotes particle i now: reservoir into u, density without its cold neighbours, hidden
 // stars handed to them (mass, momentum and energy conserved).
 void promote(StepContext& ctx, StarFormationState& sf, std::size_t i);

@@ -53,7 +53,11 @@ void drift(StepContext& ctx, int c) {
     if (dt != 0.0) {
       gas.x[i] += gas.v_full[i] * dt;
       gas.v[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
-      gas.u[i] = kicked_energy(ctx, gas.u[i], gas.du_dt[i], dt);
+      const double u_before = gas.u[i];
+      gas.u[i] = kicked_energy(ctx, u_before, gas.du_dt[i], dt);
+      // A safety net, as in the closing kick: the prediction never takes u below half of
+      // the smaller of its value and the cooling floor, whatever changed the particle mid-step.
+      if (ctx.cooling) gas.u[i] = std::max(gas.u[i], 0.5 * std::min(u_before, ctx.cooling->floor_energy()));
       gas.h[i] *= bounded_exp(gas.div_v[i] * dt / 3.0);
       gas.rho[i] *= bounded_exp(-gas.div_v[i] * dt);
     }
