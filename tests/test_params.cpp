@@ -6,6 +6,7 @@
 
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
+#include "engine/RunConfig.hpp"
 #include "params/ParameterSchema.hpp"
 
 namespace fountain {
@@ -77,6 +78,29 @@ TEST(Parameters, MissingFileIsNamed) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/params.yml"), std::string::npos);
   }
+}
+
+// Checks across keys happen when the run's configuration is read, still before any work.
+std::string config_error_of(const std::string& yaml) {
+  try {
+    RunConfig::from(ParameterFile::parse(yaml, "params.yml"));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Parameters, FeedbackSharesAboveOneAreRefused) {
+  const auto msg = config_error_of(std::string(kMinimal) + "feedback:\n  eps_cold: 0.6\n  eps_hot: 0.5\n");
+  EXPECT_NE(msg.find("feedback.eps_cold"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("params.yml"), std::string::npos) << msg;
+  EXPECT_EQ(config_error_of(std::string(kMinimal) + "feedback:\n  eps_cold: 0.4\n  eps_hot: 0.4\n"), "");
+}
+
+TEST(Parameters, DissolvingBeforeSpawningIsRefused) {
+  const auto msg = config_error_of(std::string(kMinimal) +
+                                   "star_formation:\n  spawn_fraction: 0.5\n  dissolve_fraction: 0.6\n");
+  EXPECT_NE(msg.find("star_formation.dissolve_fraction"), std::string::npos) << msg;
 }
 
 TEST(Parameters, ReferenceDocumentIsUpToDate) {
