@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "analysis/Diagnostics.hpp"
 #include "core/Error.hpp"
 #include "cooling/CoolingLoop.hpp"
 #include "gravity/GravityLoop.hpp"
@@ -55,9 +56,8 @@ void Engine::setup_star_formation() {
     sf_->temperature = [c](double u) { return c->temperature(u); };
     sf_->energy_at = [c](double t) { return c->energy_at(t); };
   } else {
-    // Fully ionised primordial gas (mean molecular weight 0.59), as the diagnostics assume.
-    constexpr double k_boltzmann = 1.380649e-16, m_proton = 1.67262192369e-24;
-    const double factor = (config_.hydro.gamma - 1.0) * 0.59 * m_proton / k_boltzmann * config_.units.specific_energy_cgs();
+    // Fully ionised primordial gas, as the diagnostics assume: T is proportional to u.
+    const double factor = analysis::ideal_gas_temperature(config_.units, config_.hydro.gamma)(1.0);
     sf_->temperature = [factor](double u) { return factor * u; };
     sf_->energy_at = [factor](double t) { return t / factor; };
   }
