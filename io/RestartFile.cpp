@@ -52,7 +52,6 @@ void for_each_field(Gas& g, Fn&& fn) {
   fn("promoted", g.promoted);
   fn("promotion_time", g.promotion_time);
   fn("feedback_hot_energy", g.feedback_hot_energy);
-  fn("mass_formed", g.mass_formed);
   fn("u_full", g.u_full);
   fn("u", g.u);
   fn("h", g.h);

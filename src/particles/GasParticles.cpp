@@ -19,7 +19,7 @@ void GasParticles::permute(const std::vector<std::size_t>& order) {
   std::vector<TimeBin> sb;
   apply(id, order, si);
   for (auto* f : {&mass, &mass_initial, &mass_stars_hidden, &reservoir, &promotion_time, &feedback_hot_energy,
-                  &mass_formed, &u_full, &u, &h, &rho, &rho_msph, &h_msph, &wcount, &wcount_dh, &div_v,
+                  &u_full, &u, &h, &rho, &rho_msph, &h_msph, &wcount, &wcount_dh, &div_v,
                   &balsara, &soundspeed, &p_over_rho_a, &inv_rho_2ma, &du_dt, &du_dt_cool, &potential})
     apply(*f, order, sd);
   for (auto* f : {&x, &v_full, &v, &curl_v, &a_hydro, &a_grav}) apply(*f, order, sv);

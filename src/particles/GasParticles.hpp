@@ -26,10 +26,8 @@ struct GasParticles {
   std::vector<double> reservoir;          // cold-phase feedback energy held back (energy, not specific)
   std::vector<std::uint8_t> promoted;     // 1 once promoted to the hot phase by feedback
   std::vector<double> promotion_time;     // when it was (last) promoted; -1 if never
-  // Set by star formation for this step's feedback task: energy for the hot neighbours and
-  // the stellar mass formed.
+  // Set by star formation for this step's feedback task: energy for the hot neighbours.
   std::vector<double> feedback_hot_energy;
-  std::vector<double> mass_formed;
   std::vector<Vec3> x;                // position
   std::vector<Vec3> v_full;           // integrated velocity (half-step after a first kick)
   std::vector<double> u_full;         // integrated specific internal energy
@@ -79,7 +77,7 @@ struct GasParticles {
   void resize(std::size_t n) {
     id.resize(n); mass.resize(n);
     mass_initial.resize(n); mass_stars_hidden.resize(n); reservoir.resize(n); promoted.resize(n);
-    promotion_time.resize(n, -1.0); feedback_hot_energy.resize(n); mass_formed.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
+    promotion_time.resize(n, -1.0); feedback_hot_energy.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
     v.resize(n); u.resize(n); h.resize(n); rho.resize(n);
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);

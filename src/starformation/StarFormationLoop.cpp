@@ -90,7 +90,6 @@ void form_stars(StepContext& ctx, StarFormationState& sf, int c) {
   const bool feedback_sites = sf.params.eps_hot > 0.0 || sf.params.eps_cold > 0.0;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
-    gas.mass_formed[i] = 0.0;
     gas.feedback_hot_energy[i] = 0.0;
     const double dt = ctx.timeline.step(gas.time_bin[i]);
     const GasState s{gas.div_v[i], gas.rho[i], gas.h[i], hydro::sound_speed(gas.rho[i], gas.u[i], ctx.hydro.gamma),
@@ -99,7 +98,6 @@ void form_stars(StepContext& ctx, StarFormationState& sf, int c) {
       const double dm = sf.law.mass_formed(gas.mass[i], gas.rho[i], dt);
       gas.mass[i] -= dm;
       gas.mass_stars_hidden[i] += dm;
-      gas.mass_formed[i] = dm;
       cf.tally.mass_formed += dm;
       cf.tally.thermal_locked += dm * gas.u_full[i];
       const FeedbackShares e = split_feedback(sf.energy_per_mass * dm, sf.params.eps_cold, sf.params.eps_hot);
