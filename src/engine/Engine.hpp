@@ -99,7 +99,6 @@ class Engine {
   const starformation::StarFormationTally& star_formation_total() const { return sf_total_; }
   const starformation::StarFormationTally& star_formation_last_step() const { return sf_last_step_; }
   void set_star_formation_total(const starformation::StarFormationTally& t) { sf_total_ = t; }
-  bool star_formation_enabled() const { return sf_ != nullptr; }
   // Tallies this step's star formation, then spawns stars and dissolves gas (recutting the
   // cells if any particle came or went). Every step ends with it; public so that tests can
   // apply it to a state they set up.
