@@ -12,6 +12,7 @@
 # the time unit is 977.8 Gyr, so 1.2 Gyr is t = 1.227e-3.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
+. "$here/run_or_resume.sh"
 root=$(cd "$here/../.." && pwd)
 bin="$root/build/fountain"
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
@@ -57,12 +58,7 @@ cooling:
   enabled: true
 EOT
     echo "== $n per species, $scheme"
-    if [ -f "$dir/restart.hdf5" ]; then
-      "$bin" run "$dir/params.yml" -t "$threads" -q --restart
-    else
-      "$bin" run "$dir/params.yml" -t "$threads" -q
-    fi
-    touch "$dir/done"
+    run_or_resume "$dir"
   done
 done
 /usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "$root/docs/validation"

@@ -16,6 +16,7 @@
 # redone (delete its folder to redo it), a killed one continues from its restart file.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
+. "$here/run_or_resume.sh"
 root=$(cd "$here/../.." && pwd)
 bin="$root/build/fountain"
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
@@ -81,12 +82,7 @@ feedback:
   eps_hot: $eps_h
 EOT
   echo "== $run ($n per species, M = $mass, eps_c = $eps_c, eps_h = $eps_h, MSPH $msph)"
-  if [ -f "$dir/restart.hdf5" ]; then
-    "$bin" run "$dir/params.yml" -t "$threads" -q --restart
-  else
-    "$bin" run "$dir/params.yml" -t "$threads" -q
-  fi
-  touch "$dir/done"
+  run_or_resume "$dir"
 done
 
 plot() {
