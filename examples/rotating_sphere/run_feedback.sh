@@ -18,7 +18,9 @@ set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 . "$here/run_or_resume.sh"
 root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
+# FOUNTAIN_BIN: the executable (default build/fountain, built if missing); point it at a copy
+# to keep rebuilding the tree while a long set runs.
+bin=${FOUNTAIN_BIN:-$root/build/fountain}
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
 n=${N:-4000}
 t_end_gyr=${T_END:-2}
