@@ -38,22 +38,31 @@ void walk_cell(StepContext& ctx, int c) {
   CollisionlessParticles& dm = ctx.dm;
   const Cell& cell = ctx.space.cell(c);
   const WalkConfig config = ctx.gravity.walk();
-  const GravityTree& tree = *ctx.tree;
+  // The cell's active particles of both species are walked together, in groups.
+  std::vector<GravityTarget> targets;
+  std::vector<std::size_t> gas_targets, dm_targets;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
-    const GravityTarget t{gas.x[i], ctx.gravity.softening_gas, old_acceleration(gas.a_grav[i]),
-                          static_cast<std::int64_t>(i)};
-    const GravityResult r = tree.accelerate(t, config);
-    gas.a_grav[i] = r.acceleration;
-    gas.potential[i] = r.potential;
+    targets.push_back({gas.x[i], ctx.gravity.softening_gas, old_acceleration(gas.a_grav[i]),
+                       static_cast<std::int64_t>(i)});
+    gas_targets.push_back(i);
   }
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
     if (!ctx.is_active_dm(i)) continue;
-    const GravityTarget t{dm.x[i], ctx.gravity.softening(dm.species[i]), old_acceleration(dm.a_grav[i]),
-                          static_cast<std::int64_t>(gas.size() + i)};
-    const GravityResult r = tree.accelerate(t, config);
-    dm.a_grav[i] = r.acceleration;
-    dm.potential[i] = r.potential;
+    targets.push_back({dm.x[i], ctx.gravity.softening(dm.species[i]), old_acceleration(dm.a_grav[i]),
+                       static_cast<std::int64_t>(gas.size() + i)});
+    dm_targets.push_back(i);
+  }
+  std::vector<GravityResult> results(targets.size());
+  ctx.tree->accelerate(targets, config, results);
+  std::size_t k = 0;
+  for (const std::size_t i : gas_targets) {
+    gas.a_grav[i] = results[k].acceleration;
+    gas.potential[i] = results[k++].potential;
+  }
+  for (const std::size_t i : dm_targets) {
+    dm.a_grav[i] = results[k].acceleration;
+    dm.potential[i] = results[k++].potential;
   }
 }
 

@@ -64,7 +64,7 @@ struct TreeNode {
 
 // Built once from the sources (copied, in tree order), then read-only: any number of walks
 // may run on it at once from any threads, and each walk's result depends only on the tree
-// and its target, so per-cell walk tasks are reproducible whatever the thread count.
+// and its targets, so per-cell walk tasks are reproducible whatever the thread count.
 class GravityTree {
  public:
   GravityTree(std::span<const Vec3> positions, std::span<const double> masses,
@@ -72,7 +72,11 @@ class GravityTree {
 
   GravityResult accelerate(const GravityTarget& target, const WalkConfig& config) const;
 
-  // The same for a group of targets (one engine task per cell of targets will call this).
+  // The same for many targets (an engine task passes its cell's active particles): they are
+  // walked in spatially compact groups of up to kGroupSize, each group sharing one walk whose
+  // opening tests hold for every point of the group's box. A target's answer therefore
+  // depends on the targets passed with it (never on the thread running the call).
+  static constexpr int kGroupSize = 16;
   void accelerate(std::span<const GravityTarget> targets, const WalkConfig& config,
                   std::span<GravityResult> results) const;
 
@@ -86,6 +90,11 @@ class GravityTree {
   void build(std::int32_t first, std::int32_t count, const Vec3& centre, double side, int depth,
              std::vector<std::int32_t>& scratch, std::span<const Vec3> positions,
              std::span<const double> masses, std::span<const double> softenings);
+
+  struct Group;
+  struct InteractionList;
+  void walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const;
+  void evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const;
 
   TreeConfig config_;
   std::vector<TreeNode> nodes_;

@@ -1,0 +1,258 @@
+// The tree walk: targets in spatially compact groups share one walk and one interaction list,
+// which is then evaluated for every target of the group (docs/gravity.md, "Grouped walk").
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <stdexcept>
+#include <vector>
+
+#include "core/VectorClones.hpp"
+#include "gravity/GravityTree.hpp"
+
+namespace fountain::gravity {
+
+// Targets per group. The walk's decisions are shared by the group and the evaluation loops
+// run over its targets (vectorised), so larger groups cost fewer decisions per target but
+// longer lists, as each node is judged from the group's box rather than from one point.
+constexpr int kGroupSize = GravityTree::kGroupSize;
+
+struct GravityTree::Group {
+  int n = 0;
+  double x[kGroupSize], y[kGroupSize], z[kGroupSize], eps[kGroupSize];
+  double ax[kGroupSize], ay[kGroupSize], az[kGroupSize], pot[kGroupSize];
+  std::int64_t self[kGroupSize];
+  Vec3 centre, half;      // the box around the targets' positions
+  double h_max = 0.0;     // the largest target spline length
+  double a_crit = 0.0;    // alpha_force times the smallest |a_old|
+  bool relative = true;   // false if any target lacks |a_old|: Barnes-Hut for the group
+};
+
+// What one walk accepted. Particles are split by whether the Newtonian force holds for the
+// whole group (beyond every pair's spline length), so that list is evaluated without branches.
+struct GravityTree::InteractionList {
+  std::vector<std::int32_t> nodes, far, near;
+  void clear() {
+    nodes.clear();
+    far.clear();
+    near.clear();
+  }
+};
+
+namespace {
+// The gap between the group's box and a point or a cube, per axis.
+inline double gap(double offset, double reach) { return std::max(std::fabs(offset) - reach, 0.0); }
+}  // namespace
+
+// Every test is the one-target test applied to the nearest point of the group's box, so a
+// group of one decides exactly as a single target would, and each target of a larger group
+// meets every criterion at least as strictly as it would alone.
+void GravityTree::walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const {
+  list.clear();
+  const double theta2 = config.theta * config.theta;
+  const double cutoff = config.split.cutoff_radius();
+  std::int32_t n = 0;
+  while (n >= 0) {
+    const TreeNode& node = nodes_[n];
+    const double half = 0.5 * node.side;
+    const double ox = node.centre.x - g.centre.x, oy = node.centre.y - g.centre.y, oz = node.centre.z - g.centre.z;
+    const double gx = gap(ox, half + g.half.x), gy = gap(oy, half + g.half.y), gz = gap(oz, half + g.half.z);
+    const double d2box = gx * gx + gy * gy + gz * gz;
+    // GADGET-2's safety check: a target within the cube grown by 10% per side opens it.
+    const double grown = 0.6 * node.side;
+    const bool inside_enlarged = std::fabs(ox) < grown + g.half.x && std::fabs(oy) < grown + g.half.y &&
+                                 std::fabs(oz) < grown + g.half.z;
+    const double h = std::max(g.h_max, spline_length(node.max_softening));
+    bool open = true;
+    if (config.split.enabled() && d2box > cutoff * cutoff) {
+      n = node.next;  // beyond the short-range force: the mesh has it
+      continue;
+    }
+    // The softening test uses the distance to the node's cube, not to its centre of mass:
+    // an accepted node has every particle beyond every pair's spline length, so the
+    // Newtonian multipole expansion is the right one.
+    if (d2box >= h * h && !inside_enlarged) {
+      const double cx = gap(node.com.x - g.centre.x, g.half.x), cy = gap(node.com.y - g.centre.y, g.half.y),
+                   cz = gap(node.com.z - g.centre.z, g.half.z);
+      const double r2 = cx * cx + cy * cy + cz * cz;
+      const double l2 = node.side * node.side;
+      if (!g.relative) {
+        open = l2 > theta2 * r2;
+      } else if (config.criterion == OpeningCriterion::gadget2_monopole) {
+        open = config.G * node.mass * l2 > g.a_crit * r2 * r2;  // G M l^2 / r^4 > alpha |a_old|
+      } else {
+        open = config.G * node.mass * l2 * node.side > g.a_crit * r2 * r2 * std::sqrt(r2);  // G M l^3 / r^5
+      }
+    }
+    if (!open) {
+      list.nodes.push_back(n);
+      n = node.next;
+    } else if (node.first_child >= 0) {
+      n = node.first_child;
+    } else {
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        const double px = gap(pos_[k].x - g.centre.x, g.half.x), py = gap(pos_[k].y - g.centre.y, g.half.y),
+                     pz = gap(pos_[k].z - g.centre.z, g.half.z);
+        const double hp = std::max(g.h_max, spline_length(eps_[k]));
+        const double d2 = px * px + py * py + pz * pz;
+        // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
+        (d2 > 0.0 && d2 >= hp * hp ? list.far : list.near).push_back(k);
+      }
+      n = node.next;
+    }
+  }
+}
+
+// The evaluation repeats node_field's and softened_pair's arithmetic operation by operation
+// (tests compare them bit for bit), written over the group's targets so the loops vectorise.
+// Each target sums its list in list order: nodes, far particles, near particles.
+FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const {
+  const int nt = g.n;
+  const double G = config.G;
+  const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
+  // Without the branch on the expansion order inside, the loop over targets vectorises.
+  auto nodes = [&]<bool kQuadrupole>() {
+    for (const std::int32_t k : list.nodes) {
+      const TreeNode& node = nodes_[k];
+      const double cx = node.com.x, cy = node.com.y, cz = node.com.z;
+      const double mono_a = -G * node.mass, mono_p = -G * node.mass;  // times the split's factors (one today)
+      const auto& q = node.quadrupole;
+      for (int t = 0; t < nt; ++t) {
+        const double dx = g.x[t] - cx, dy = g.y[t] - cy, dz = g.z[t] - cz;
+        const double r2 = dx * dx + dy * dy + dz * dz;
+        const double r_inv = 1.0 / std::sqrt(r2);
+        const double r2_inv = r_inv * r_inv;
+        const double r3_inv = r_inv * r2_inv;
+        const double s = mono_a * r3_inv;
+        double fx = s * dx, fy = s * dy, fz = s * dz, fp = mono_p * r_inv;
+        if constexpr (kQuadrupole) {
+          const double r5_inv = r3_inv * r2_inv;
+          const double qx = q[0] * dx + q[3] * dy + q[4] * dz, qy = q[3] * dx + q[1] * dy + q[5] * dz,
+                       qz = q[4] * dx + q[5] * dy + q[2] * dz;
+          const double dqd = dx * qx + dy * qy + dz * qz;
+          const double c = -2.5 * dqd * r2_inv;
+          const double w = G * r5_inv;
+          fx += w * (qx + c * dx);
+          fy += w * (qy + c * dy);
+          fz += w * (qz + c * dz);
+          fp -= G * 0.5 * dqd * r5_inv;
+        }
+        g.ax[t] += fx;
+        g.ay[t] += fy;
+        g.az[t] += fz;
+        g.pot[t] += fp;
+      }
+    }
+  };
+  if (quadrupole)
+    nodes.template operator()<true>();
+  else
+    nodes.template operator()<false>();
+  for (const std::int32_t k : list.far) {
+    const double px = pos_[k].x, py = pos_[k].y, pz = pos_[k].z, gm = G * mass_[k];
+    for (int t = 0; t < nt; ++t) {
+      const double dx = g.x[t] - px, dy = g.y[t] - py, dz = g.z[t] - pz;
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      const double r_inv = 1.0 / std::sqrt(r2);
+      const double s = gm * (r_inv / r2);
+      g.ax[t] -= s * dx;
+      g.ay[t] -= s * dy;
+      g.az[t] -= s * dz;
+      g.pot[t] += gm * -r_inv;
+    }
+  }
+  for (const std::int32_t k : list.near) {
+    const Vec3& p = pos_[k];
+    const double gm = G * mass_[k];
+    for (int t = 0; t < nt; ++t) {
+      if (index_[k] == g.self[t]) continue;
+      const double dx = g.x[t] - p.x, dy = g.y[t] - p.y, dz = g.z[t] - p.z;
+      const double r2 = dx * dx + dy * dy + dz * dz;
+      const double h = pair_spline_length(g.eps[t], eps_[k]);
+      // Unsoftened coincident particles have no force direction; they are left out.
+      if (r2 == 0.0 && h == 0.0) continue;
+      const PairGravity f = softened_pair(std::sqrt(r2), r2, h, config.split);
+      const double s = gm * f.force;
+      g.ax[t] -= s * dx;
+      g.ay[t] -= s * dy;
+      g.az[t] -= s * dz;
+      g.pot[t] += gm * f.potential;
+    }
+  }
+}
+
+GravityResult GravityTree::accelerate(const GravityTarget& target, const WalkConfig& config) const {
+  GravityResult result;
+  accelerate(std::span<const GravityTarget>(&target, 1), config, std::span<GravityResult>(&result, 1));
+  return result;
+}
+
+void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkConfig& config,
+                             std::span<GravityResult> results) const {
+  if (results.size() != targets.size())
+    throw std::invalid_argument("GravityTree::accelerate: targets and results differ in length");
+  for (GravityResult& r : results) r = GravityResult{};
+  if (nodes_.empty() || targets.empty()) return;
+
+  // Groups are runs of targets along a Morton curve through the root cube, so they are
+  // compact in space; ties keep the callers' order, so the grouping is reproducible.
+  const TreeNode& root = nodes_[0];
+  const Vec3 corner = root.centre - Vec3{0.5 * root.side, 0.5 * root.side, 0.5 * root.side};
+  auto morton = [&](const Vec3& x) {
+    std::uint64_t key = 0;
+    for (int d = 0; d < 3; ++d) {
+      const double f = std::clamp((x[d] - corner[d]) / root.side, 0.0, 1.0);
+      auto cell = static_cast<std::uint64_t>(f * 2097151.0);  // 21 bits per axis
+      for (int b = 0; b < 21; ++b) key |= ((cell >> b) & 1u) << (3 * b + d);
+    }
+    return key;
+  };
+  std::vector<std::uint64_t> keys(targets.size());
+  for (std::size_t i = 0; i < targets.size(); ++i) keys[i] = morton(targets[i].position);
+  std::vector<std::size_t> order(targets.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
+
+  Group g;
+  InteractionList list;
+  for (std::size_t begin = 0; begin < order.size(); begin += kGroupSize) {
+    g.n = static_cast<int>(std::min<std::size_t>(kGroupSize, order.size() - begin));
+    Vec3 lo = targets[order[begin]].position, hi = lo;
+    g.h_max = 0.0;
+    g.relative = true;
+    double a_min = 0.0;
+    for (int t = 0; t < g.n; ++t) {
+      const GravityTarget& tg = targets[order[begin + static_cast<std::size_t>(t)]];
+      g.x[t] = tg.position.x;
+      g.y[t] = tg.position.y;
+      g.z[t] = tg.position.z;
+      g.eps[t] = tg.softening;
+      g.self[t] = tg.source_index;
+      g.ax[t] = g.ay[t] = g.az[t] = g.pot[t] = 0.0;
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], tg.position[d]);
+        hi[d] = std::max(hi[d], tg.position[d]);
+      }
+      g.h_max = std::max(g.h_max, spline_length(tg.softening));
+      g.relative = g.relative && tg.a_old >= 0.0;
+      a_min = t == 0 ? tg.a_old : std::min(a_min, tg.a_old);
+    }
+    g.centre = 0.5 * (lo + hi);
+    g.half = 0.5 * (hi - lo);
+    g.a_crit = config.alpha_force * a_min;
+    walk_group(g, config, list);
+    evaluate_group(g, config, list);
+
+    for (int t = 0; t < g.n; ++t) {
+      GravityResult& r = results[order[begin + static_cast<std::size_t>(t)]];
+      r.acceleration = {g.ax[t], g.ay[t], g.az[t]};
+      r.potential = g.pot[t];
+      r.node_interactions = static_cast<std::int64_t>(list.nodes.size());
+      std::int64_t own = 0;
+      for (const std::int32_t k : list.near) own += index_[k] == g.self[t] ? 1 : 0;
+      r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - own;
+    }
+  }
+}
+
+}  // namespace fountain::gravity
