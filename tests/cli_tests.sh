@@ -89,6 +89,19 @@ with h5py.File('zero.hdf5', 'w') as f:
   bad_parameter)
     params good.hdf5 out "hydro:
   gamma: soft"; expect_error "hydro.gamma" ;;
+  mpi_ranks_refused)
+    # Until runs are split across ranks, N ranks must not each run the problem and write the
+    # same files: refused before anything is read or written. (The leak checker is off for
+    # this one: Open MPI's own allocations outlive MPI_Finalize.)
+    params good.hdf5 out
+    set +e
+    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params.yml -q > out.txt 2>&1
+    status=$?
+    set -e
+    [ "$status" -ne 0 ] || fail "a 2-rank run was not refused"
+    grep -q "started on 2 MPI ranks" out.txt || { cat out.txt; fail "no message naming the rank count"; }
+    [ ! -e out ] || fail "the refused run wrote its output folder"
+    echo "ok: $(head -1 out.txt)" ;;
   snapshot_opens_in_yt)
     params good.hdf5 out
     "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }

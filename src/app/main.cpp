@@ -11,9 +11,11 @@
 #include "io/InitialConditions.hpp"
 #include "params/ParameterFile.hpp"
 #include "params/ParameterSchema.hpp"
+#include "tasks/MpiSession.hpp"
 
 int main(int argc, char** argv) {
   using namespace fountain;
+  tasks::MpiSession mpi(&argc, &argv);
   CLI::App app{"Fountain: SPH + tree gravity for galaxy formation (Marri & White 2003 physics)"};
   app.require_subcommand(1);
 
@@ -52,6 +54,17 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
+  }
+
+  // Runs are not yet split across ranks: N ranks would each run the whole problem and write
+  // the same files. Refuse before anything is read or written.
+  if (mpi.size() > 1) {
+    if (mpi.rank() == 0)
+      fmt::print(stderr,
+                 "error: fountain was started on {} MPI ranks, but running across ranks is not implemented yet; "
+                 "start it as one process (fountain run -t THREADS ...). Nothing was read or written.\n",
+                 mpi.size());
+    return 2;
   }
 
   try {

@@ -1,0 +1,51 @@
+#include "tasks/MpiSession.hpp"
+
+#include <cstdlib>
+
+#ifdef FOUNTAIN_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace fountain::tasks {
+
+#ifdef FOUNTAIN_HAVE_MPI
+namespace {
+// Whether a launcher (Open MPI's mpirun, or a PMI/PMIx one such as MPICH's or Slurm's)
+// started this process. A plain `fountain ...` then skips MPI_Init: a singleton init costs
+// half a second and leaves the library's allocations for leak checkers to report.
+bool launched_by_mpirun() {
+  for (const char* v : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_SIZE", "PMI_RANK"})
+    if (std::getenv(v) != nullptr) return true;
+  return false;
+}
+}  // namespace
+
+MpiSession::MpiSession(int* argc, char*** argv) {
+  if (!launched_by_mpirun()) return;
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) {
+    int provided = MPI_THREAD_SINGLE;
+    MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided);
+    thread_multiple_ = provided >= MPI_THREAD_MULTIPLE;
+    initialised_here_ = true;
+  }
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+}
+
+MpiSession::~MpiSession() {
+  if (!initialised_here_) return;
+  int finalised = 0;
+  MPI_Finalized(&finalised);
+  if (!finalised) MPI_Finalize();
+}
+
+bool MpiSession::available() { return true; }
+#else
+MpiSession::MpiSession(int*, char***) {}
+MpiSession::~MpiSession() = default;
+bool MpiSession::available() { return false; }
+#endif
+
+}  // namespace fountain::tasks
