@@ -14,7 +14,8 @@ set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 . "$here/run_or_resume.sh"
 root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
+# FOUNTAIN_BIN: the executable (default build/fountain, built if missing).
+bin=${FOUNTAIN_BIN:-$root/build/fountain}
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
 out="$here/output"
 mkdir -p "$out"
