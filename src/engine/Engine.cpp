@@ -318,9 +318,16 @@ void Engine::run_graph(StepInfo* info) {
     info->tasks_run += step_tasks_.size();
   }
   if (ctx_->cover_exceeded) rebuild_pending_ = true;
-  if (info && ctx_->h_capped > 0)
-    fmt::print(stderr, "warning: {} particles had h capped by their cell's reach at t = {}; rebuilding\n",
-               ctx_->h_capped.load(), time());
+  if (info && ctx_->h_capped > 0) {
+    // Harmless (the cells are recut and the next step solves h in full) but it can recur
+    // every few steps in a run with promotions: the first ten are printed, then every 1000th.
+    ++h_capped_steps_;
+    if (h_capped_steps_ <= 10 || h_capped_steps_ % 1000 == 0)
+      fmt::print(stderr, "warning: {} particles had h capped by their cell's reach at t = {}; rebuilding{}\n",
+                 ctx_->h_capped.load(), time(),
+                 h_capped_steps_ == 10 ? " (further such warnings: every 1000th only)"
+                 : h_capped_steps_ > 10 ? fmt::format(" ({} steps so far)", h_capped_steps_) : "");
+  }
 }
 
 void Engine::initialise() {

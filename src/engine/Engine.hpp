@@ -146,6 +146,7 @@ class Engine {
   double radiated_ = 0.0;
   IntegerTime ti_current_ = 0;
   long long steps_ = 0;
+  long long h_capped_steps_ = 0;  // steps whose h solve was capped by a cell's reach
   bool rebuild_pending_ = true;
   bool initialised_ = false;  // the first forces and timesteps are done
   bool record_timeline_ = false;
