@@ -323,10 +323,9 @@ void Engine::run_graph(StepInfo* info) {
     // every few steps in a run with promotions: the first ten are printed, then every 1000th.
     ++h_capped_steps_;
     if (h_capped_steps_ <= 10 || h_capped_steps_ % 1000 == 0)
-      fmt::print(stderr, "warning: {} particles had h capped by their cell's reach at t = {}; rebuilding{}\n",
-                 ctx_->h_capped.load(), time(),
-                 h_capped_steps_ == 10 ? " (further such warnings: every 1000th only)"
-                 : h_capped_steps_ > 10 ? fmt::format(" ({} steps so far)", h_capped_steps_) : "");
+      fmt::print(stderr, "warning: {} particles had h capped by their cell's reach at t = {}; rebuilding ({} such steps{})\n",
+                 ctx_->h_capped.load(), time(), h_capped_steps_,
+                 h_capped_steps_ == 10 ? "; from here on every 1000th is printed" : "");
   }
 }
 
