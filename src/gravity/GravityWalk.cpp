@@ -22,6 +22,7 @@ struct GravityTree::Group {
   double x[kGroupSize], y[kGroupSize], z[kGroupSize], eps[kGroupSize];
   double ax[kGroupSize], ay[kGroupSize], az[kGroupSize], pot[kGroupSize];
   std::int64_t self[kGroupSize];
+  int own[kGroupSize];    // 1 if the target's own particle is on the near list (not an interaction)
   Vec3 centre, half;      // the box around the targets' positions
   double h_max = 0.0;     // the largest target spline length
   double a_crit = 0.0;    // alpha_force times the smallest |a_old|
@@ -165,7 +166,10 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
     const Vec3& p = pos_[k];
     const double gm = G * mass_[k];
     for (int t = 0; t < nt; ++t) {
-      if (index_[k] == g.self[t]) continue;
+      if (index_[k] == g.self[t]) {
+        g.own[t] = 1;
+        continue;
+      }
       const double dx = g.x[t] - p.x, dy = g.y[t] - p.y, dz = g.z[t] - p.z;
       const double r2 = dx * dx + dy * dy + dz * dz;
       const double h = pair_spline_length(g.eps[t], eps_[k]);
@@ -229,6 +233,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       g.eps[t] = tg.softening;
       g.self[t] = tg.source_index;
       g.ax[t] = g.ay[t] = g.az[t] = g.pot[t] = 0.0;
+      g.own[t] = 0;
       for (int d = 0; d < 3; ++d) {
         lo[d] = std::min(lo[d], tg.position[d]);
         hi[d] = std::max(hi[d], tg.position[d]);
@@ -252,9 +257,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       r.acceleration = {g.ax[t], g.ay[t], g.az[t]};
       r.potential = g.pot[t];
       r.node_interactions = static_cast<std::int64_t>(list.nodes.size());
-      std::int64_t own = 0;
-      for (const std::int32_t k : list.near) own += index_[k] == g.self[t] ? 1 : 0;
-      r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - own;
+      r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - g.own[t];
     }
   }
 }
