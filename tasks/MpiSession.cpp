@@ -42,10 +42,16 @@ MpiSession::~MpiSession() {
 }
 
 bool MpiSession::available() { return true; }
+
+void MpiSession::abort(int code) const {
+  if (size_ > 1) MPI_Abort(MPI_COMM_WORLD, code);
+  std::exit(code);
+}
 #else
 MpiSession::MpiSession(int*, char***) {}
 MpiSession::~MpiSession() = default;
 bool MpiSession::available() { return false; }
+void MpiSession::abort(int code) const { std::exit(code); }
 #endif
 
 }  // namespace fountain::tasks

@@ -17,6 +17,8 @@ class MpiSession {
   int rank() const { return rank_; }
   int size() const { return size_; }
   bool thread_multiple() const { return thread_multiple_; }
+  // Stops every rank of the run (after a failure on this one) and returns `code` when alone.
+  [[noreturn]] void abort(int code) const;
   // Whether this process was built with MPI at all (FOUNTAIN_MPI).
   static bool available();
 

@@ -89,19 +89,96 @@ with h5py.File('zero.hdf5', 'w') as f:
   bad_parameter)
     params good.hdf5 out "hydro:
   gamma: soft"; expect_error "hydro.gamma" ;;
-  mpi_ranks_refused)
-    # Until runs are split across ranks, N ranks must not each run the problem and write the
-    # same files: refused before anything is read or written. (The leak checker is off for
-    # this one: Open MPI's own allocations outlive MPI_Finalize.)
-    params good.hdf5 out
-    set +e
-    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params.yml -q > out.txt 2>&1
-    status=$?
-    set -e
-    [ "$status" -ne 0 ] || fail "a 2-rank run was not refused"
-    grep -q "started on 2 MPI ranks" out.txt || { cat out.txt; fail "no message naming the rank count"; }
-    [ ! -e out ] || fail "the refused run wrote its output folder"
-    echo "ok: $(head -1 out.txt)" ;;
+  mpi_hydro_ranks|mpi_gravity_ranks|mpi_feedback_ranks|mpi_uneven_ranks)
+    # Across MPI ranks the run must give the snapshots of one rank, bit for bit, on 2, 3 and 4
+    # ranks (oversubscribed): Sod with the timestep limiter (hydro); an Evrard collapse with
+    # self-gravity; a rotating sphere with gravity, cooling, MSPH, star formation with spawning
+    # and MFB feedback with promotions. mpi_uneven_ranks: a 4 x 1 x 1 top-level grid on 3 ranks
+    # (which do not divide it) and 5 (one owns no cell), with the owners chosen anew at every
+    # recut (a repartition in the middle of the run). The leak checker is off: Open MPI's
+    # own allocations outlive MPI_Finalize.
+    mpirun_n() { ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$@"; }
+    extra="" ranks="2 3 4"
+    case $case_name in
+      mpi_hydro_ranks)
+        "$bin" ic sod -n 24 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Sod ICs"
+        T_END=0.02 ;;
+      mpi_uneven_ranks)
+        "$bin" ic sod -n 24 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Sod ICs"
+        T_END=0.02 ranks="3 5" extra="space:
+  top_cells: 4
+domain:
+  repartition_imbalance: 0" ;;
+      mpi_gravity_ranks)
+        "$bin" ic evrard -n 6 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Evrard ICs"
+        T_END=0.05 extra="gravity:
+  enabled: true
+  softening_gas: 0.01
+  G: 1" ;;
+      mpi_feedback_ranks)
+        "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
+        T_END=6e-4 extra="star_formation:
+  enabled: true
+feedback:
+  eps_cold: 0.4
+  eps_hot: 0.4
+hydro:
+  msph: true
+gravity:
+  enabled: true
+  softening_dark_matter: 0.002
+cooling:
+  enabled: true" ;;
+    esac
+    write_params() {  # write_params OUT_DIR
+      params ic.hdf5 "$1" "$extra"
+      if [ "$case_name" != mpi_hydro_ranks ] && [ "$case_name" != mpi_uneven_ranks ]; then
+        sed -i 's/periodic: true/periodic: false/; s/dt_max: 0.001/dt_max: 1e-5/; s/dt_min: 1e-12/dt_min: 1e-14/' params.yml
+        if [ "$case_name" = mpi_gravity_ranks ]; then sed -i 's/dt_max: 1e-5/dt_max: 0.001/' params.yml; fi
+      fi
+    }
+    write_params out1
+    "$bin" run params.yml -q -t 1 > run1.txt 2>&1 || { cat run1.txt; fail "1-rank run"; }
+    for n in $ranks; do
+      write_params "out$n"
+      mpirun_n "$n" "$bin" run params.yml -q -t 1 > "run$n.txt" 2>&1 || { cat "run$n.txt"; fail "$n-rank run"; }
+      grep "^ranks: $n" "run$n.txt" || { cat "run$n.txt"; fail "no rank summary from the $n-rank run"; }
+      [ ! -e "out$n/snapshot_0002.hdf5" ] || fail "more snapshots than the 1-rank run"
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 "out$n/snapshot_0001.hdf5"
+      if [ "$case_name" = mpi_uneven_ranks ]; then
+        chosen=$(sed -n "s/^ranks: $n, cell owners chosen \([0-9]*\) times.*/\1/p" "run$n.txt")
+        [ "$chosen" -gt 1 ] || fail "owners were chosen only $chosen times: no repartition mid-run"
+      fi
+    done
+    if [ "$case_name" = mpi_feedback_ranks ]; then
+      "$python" -c "
+import h5py, sys
+with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
+    sys.exit(0 if 'PartType4' in f and f['PartType4/Coordinates'].shape[0] > 0 else 1)" || fail "no star particle was spawned"
+    fi ;;
+  mpi_restart_after_kill)
+    # A 2-rank run killed (SIGKILL to its ranks) after a restart file, and restarted on 2
+    # ranks, ends as the uninterrupted 1-rank run does, bit for bit.
+    extra="restart:
+  every_steps: 4"
+    "$bin" ic sod -n 24 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Sod ICs"
+    T_END=0.05 params ic.hdf5 outA "$extra"; cp params.yml paramsA.yml
+    T_END=0.05 params ic.hdf5 outB "$extra"; cp params.yml paramsB.yml
+    "$bin" run paramsA.yml -q > /dev/null 2>&1 || fail "uninterrupted run"
+    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run paramsB.yml > runB.txt 2>&1 &
+    pid=$!
+    n=0
+    while [ ! -f outB/restart.hdf5 ] && kill -0 "$pid" 2>/dev/null && [ $n -lt 600 ]; do sleep 0.05; n=$((n + 1)); done
+    sleep 0.2
+    pkill -9 -f "run paramsB.yml" 2>/dev/null || true
+    wait "$pid" 2>/dev/null || true
+    [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
+    [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was killed"
+    echo "killed after: $(grep -c '^step' runB.txt) steps"
+    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run paramsB.yml --restart \
+      > restart.txt 2>&1 || { cat restart.txt; fail "restart on 2 ranks failed"; }
+    head -1 restart.txt
+    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
   snapshot_opens_in_yt)
     params good.hdf5 out
     "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }

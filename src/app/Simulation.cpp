@@ -8,6 +8,8 @@
 #include <fstream>
 #include <memory>
 
+#include <unistd.h>
+
 #include "core/Error.hpp"
 #include "engine/Engine.hpp"
 #include "io/InitialConditions.hpp"
@@ -40,7 +42,8 @@ void check_output_directory(const std::string& dir) {
   if (ec || !fs::is_directory(dir))
     throw InputError(fmt::format("output directory '{}' cannot be created: {}", dir,
                                  ec ? ec.message() : "a file of that name exists"));
-  const fs::path probe = fs::path(dir) / ".fountain_write_test";
+  // Named by process, so ranks probing one folder at once do not remove each other's probe.
+  const fs::path probe = fs::path(dir) / fmt::format(".fountain_write_test_{}", static_cast<long>(::getpid()));
   {
     std::ofstream out(probe);
     if (!(out << "ok") || !out.flush())
@@ -78,7 +81,8 @@ void check_same_parameters(const io::RestartState& state, const ParameterFile& p
 
 std::string restart_path(const ParameterFile& params) { return params.text("output.directory") + "/restart.hdf5"; }
 
-RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_override, bool restart) {
+RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int threads_override, bool restart) {
+  bool quiet = quiet_requested;
   const auto t_start = std::chrono::steady_clock::now();
   RunConfig config = RunConfig::from(params);
   if (threads_override >= 0) config.threads = threads_override;
@@ -113,6 +117,10 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
                                        resolve_ic_path(params), ic.dm.id[i]));
 
   Engine engine(config, std::move(ic.gas), std::move(ic.dm));
+  // Every rank holds the whole state; rank 0 alone writes files and reports.
+  const bool io_rank = engine.rank() == 0;
+  if (!io_rank) quiet = true;
+  const std::string rank_suffix = engine.ranks() > 1 ? fmt::format("_rank{}", engine.rank()) : "";
   const bool dump_timeline = config.output.dump_timeline_every > 0;
   engine.set_record_timeline(dump_timeline || config.output.dump_task_graph);
   if (restart) {
@@ -149,15 +157,17 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     info.step = engine.steps();
     const std::string path = fmt::format("{}/{}_{:04d}.hdf5", config.output.directory, config.output.basename,
                                          summary.snapshots);
-    io::write_snapshot(path, engine.gas(), engine.dark_matter(), info);
+    if (io_rank) io::write_snapshot(path, engine.gas(), engine.dark_matter(), info);
     if (!quiet) fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info.time);
     ++summary.snapshots;
   };
   summary.snapshots = restart ? state.snapshots_written : 0;
   if (config.output.dump_task_graph) {
-    tasks::write_dot(engine.graph(), engine.task_types().registry, config.output.directory + "/task_graph.dot");
+    // One file per rank: each rank's graph holds its own sends and receives.
+    tasks::write_dot(engine.graph(), engine.task_types().registry,
+                     config.output.directory + "/task_graph" + rank_suffix + ".dot");
     tasks::write_dependency_csv(engine.graph(), engine.task_types().registry,
-                                config.output.directory + "/dependency_graph_0.csv");
+                                fmt::format("{}/dependency_graph_{}.csv", config.output.directory, engine.rank()));
   }
   if (!restart) write();
 
@@ -177,7 +187,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     out.next_particle_id = engine.next_particle_id();
     out.star_formation = engine.star_formation_total();
     out.parameters_yaml = config.parameters_yaml;
-    io::write_restart(restart_path(params), out);
+    if (io_rank) io::write_restart(restart_path(params), out);
     last_restart = std::chrono::steady_clock::now();
     if (!quiet) fmt::print(stderr, "restart file {} at step {}\n", restart_path(params), engine.steps());
   };
@@ -189,7 +199,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   IntegerTime ti_out = next_output_ticks();
 
   std::unique_ptr<io::StatisticsFile> statistics;
-  if (config.output.statistics_every > 0)
+  if (config.output.statistics_every > 0 && io_rank)
     statistics = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", restart);
   const analysis::PhaseThresholds phases = analysis::PhaseThresholds::paper(config.units);
   // The star formation rate of a line is the mean since the previous line.
@@ -220,8 +230,9 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
       fmt::print(stderr, "step {:6d}  t = {:<12.6g} dt = {:<11.4g} active = {:<8d} {}wall = {:.3f} ms\n", s.step,
                  s.time, s.dt, s.active, s.rebuilt ? "rebuilt " : "", 1e3 * s.wall_s);
     if (dump_timeline && s.active > 0 && s.step % config.output.dump_timeline_every == 0)
-      tasks::write_timeline_csv(engine.records_graph(), engine.task_types().registry, engine.last_records(), 0, s.step,
-                                fmt::format("{}/timeline_step{:06d}.csv", config.output.directory, s.step));
+      tasks::write_timeline_csv(engine.records_graph(), engine.task_types().registry, engine.last_records(),
+                                engine.rank(), s.step,
+                                fmt::format("{}/timeline_step{:06d}{}.csv", config.output.directory, s.step, rank_suffix));
     if (statistics && (engine.steps() % config.output.statistics_every == 0 || engine.finished())) write_statistics();
     if (engine.ti_current() == ti_out && !engine.finished()) {
       write();
@@ -230,11 +241,15 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
     }
     if (engine.finished()) break;
     const double minutes = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_restart).count() / 60.0;
-    if (g_terminate || (config.restart.every_steps > 0 && engine.steps() % config.restart.every_steps == 0) ||
-        (config.restart.every_minutes > 0 && minutes >= config.restart.every_minutes))
-      write_restart();
-    if (g_terminate) {
-      fmt::print(stderr, "stopped by SIGTERM at step {}; continue with: fountain run {} --restart\n", engine.steps(),
+    bool restart_due = g_terminate || (config.restart.every_steps > 0 && engine.steps() % config.restart.every_steps == 0) ||
+                       (config.restart.every_minutes > 0 && minutes >= config.restart.every_minutes);
+    // Clocks and signals differ between ranks: they decide together.
+    const bool terminate = engine.any_rank(g_terminate != 0);
+    restart_due = engine.any_rank(restart_due);
+    if (restart_due) write_restart();
+    if (terminate) {
+      if (io_rank)
+        fmt::print(stderr, "stopped by SIGTERM at step {}; continue with: fountain run {} --restart\n", engine.steps(),
                  params.origin());
       summary.terminated = true;
       break;
@@ -243,6 +258,10 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet, int threads_o
   if (!summary.terminated) write();
   summary.steps = engine.steps();
   summary.final_time = engine.time();
+  summary.ranks = engine.ranks();
+  summary.partitions = engine.partitions();
+  summary.bytes_sent = engine.bytes_sent();
+  summary.messages_sent = engine.messages_sent();
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return summary;
 }

@@ -1,5 +1,6 @@
 // A whole run: reads the initial conditions, steps the engine, writes snapshots and dumps.
 #pragma once
+#include <cstdint>
 #include <string>
 
 #include "engine/RunConfig.hpp"
@@ -14,6 +15,10 @@ struct RunSummary {
   double wall_s = 0.0;
   double final_time = 0.0;
   bool terminated = false;  // stopped by SIGTERM after writing a restart file
+  // Across MPI ranks (1 when alone): how often cell owners were chosen, and what this rank sent.
+  int ranks = 1;
+  int partitions = 0;
+  std::uint64_t bytes_sent = 0, messages_sent = 0;
 };
 
 // Runs the parameter file's problem to run.t_end, or continues it from its restart file

@@ -56,14 +56,14 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
 
-  // Runs are not yet split across ranks: N ranks would each run the whole problem and write
-  // the same files. Refuse before anything is read or written.
-  if (mpi.size() > 1) {
-    if (mpi.rank() == 0)
-      fmt::print(stderr,
-                 "error: fountain was started on {} MPI ranks, but running across ranks is not implemented yet; "
-                 "start it as one process (fountain run -t THREADS ...). Nothing was read or written.\n",
-                 mpi.size());
+  // Across ranks, a failure on one rank must stop the others, which would otherwise wait for
+  // it in their next exchange; every rank reads the same input, so input errors are met by all.
+  auto fail = [&](int code) {
+    if (mpi.size() > 1) mpi.abort(code);
+    return code;
+  };
+  if (mpi.size() > 1 && !*run) {
+    if (mpi.rank() == 0) fmt::print(stderr, "error: only `fountain run` runs across MPI ranks; start the others alone\n");
     return 2;
   }
 
@@ -72,8 +72,12 @@ int main(int argc, char** argv) {
       const ParameterFile params = ParameterFile::load(param_path);
       const RunSummary s = run_simulation(params, quiet, threads, restart);
       if (s.terminated) return 0;
-      fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
+      if (mpi.rank() == 0)
+        fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
+      if (mpi.rank() == 0 && s.ranks > 1)
+        fmt::print(stderr, "ranks: {}, cell owners chosen {} times; rank 0 sent {:.3g} MB in {} messages\n", s.ranks,
+                   s.partitions, 1e-6 * static_cast<double>(s.bytes_sent), s.messages_sent);
     } else if (*ic) {
       if (problem == "sphere") {
         if (resolution > 0) sphere.particles_per_species = resolution;
@@ -99,11 +103,11 @@ int main(int argc, char** argv) {
       fmt::print("{}", parameter_reference_markdown());
     }
   } catch (const InputError& e) {
-    fmt::print(stderr, "error: {}\n", e.what());
-    return 2;
+    fmt::print(stderr, "{}error: {}\n", mpi.size() > 1 ? fmt::format("rank {}: ", mpi.rank()) : "", e.what());
+    return fail(2);
   } catch (const std::exception& e) {
-    fmt::print(stderr, "internal error: {}\n", e.what());
-    return 3;
+    fmt::print(stderr, "{}internal error: {}\n", mpi.size() > 1 ? fmt::format("rank {}: ", mpi.rank()) : "", e.what());
+    return fail(3);
   }
   return 0;
 }

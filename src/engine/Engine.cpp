@@ -5,10 +5,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 
 #include "analysis/Diagnostics.hpp"
 #include "core/Error.hpp"
 #include "cooling/CoolingLoop.hpp"
+#include "domain/DomainDecomposition.hpp"
+#include "domain/RankExchange.hpp"
+#include "engine/CellMessages.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "starformation/StarFormationLoop.hpp"
@@ -39,6 +43,8 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   }
   for (std::size_t i = 0; i < gas_.size(); ++i)
     if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
+  ranks_ = domain::RankExchange::world();
+  if (ranks_) rank_ = ranks_->rank();
   if (config_.star_formation.enabled) setup_star_formation();
   guess_smoothing_lengths();
 }
@@ -94,7 +100,25 @@ void Engine::rebuild() {
   // Every particle must sit at the current time before cells are recut.
   drift_all();
   remove_dissolved();
+  // The work each rank measured in its cells since owners were last chosen, located by the
+  // cells' centres so it can be binned into the new top-level grid. Summed in rank order
+  // from an allgather (not a reduction, whose rounding may differ between ranks).
+  std::vector<std::pair<Vec3, double>> measured;
+  if (ranks_ && !leaf_cost_.empty()) {
+    domain::RankExchange::Buffer mine(leaf_cost_.size() * sizeof(double));
+    std::memcpy(mine.data(), leaf_cost_.data(), mine.size());
+    const auto all = ranks_->allgather(mine);
+    std::vector<double> total(leaf_cost_.size(), 0.0), part(leaf_cost_.size());
+    for (const auto& b : all) {
+      if (b.size() != mine.size()) throw std::logic_error("ranks disagree on the number of cells");
+      std::memcpy(part.data(), b.data(), b.size());
+      for (std::size_t c = 0; c < total.size(); ++c) total[c] += part[c];
+    }
+    for (int c : space_.leaves())
+      if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
+  }
   space_.rebuild(gas_, dm_);
+  if (ranks_) assign_owners(measured);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
   auto step_end = [&](TimeBin bin, IntegerTime ti_begin) {
@@ -141,6 +165,9 @@ void Engine::build_graph() {
   const bool star_formation = sf_ != nullptr;
   star_formation_done_task_ = star_formation ? graph_.add(types_.star_formation_done, -1, -1, -1) : -1;
   feedback_apply_task_ = star_formation ? graph_.add(types_.feedback_apply, -1, -1, -1) : -1;
+  // Direct, so the order holds on a rank that lists no search in between (both exchange
+  // with the other ranks, which call them in this order).
+  if (star_formation) graph_.depends(star_formation_done_task_, feedback_apply_task_);
   if (star_formation) sf_->cells.assign(ncells, {});
   struct Pair { int task, ci, cj; };
   std::vector<Pair> dpairs, fpairs;
@@ -153,13 +180,32 @@ void Engine::build_graph() {
   dpairs.reserve(npairs);
   fpairs.reserve(npairs);
   cell_tasks_.assign(ncells, {-1, -1});
+  // Across ranks: a cell's ghost results are sent once its ghost is done; a foreign cell's
+  // arrive by a receive that its readers wait for. Receives wait until every send of this
+  // rank is posted, so no rank can block on a message while holding back one another awaits.
+  send_task_.assign(ncells, -1);
+  recv_task_.assign(ncells, -1);
+  sends_posted_task_ = ranks_ ? graph_.add(types_.sends_posted, -1, -1, -1) : -1;
   for (int c : leaves) {
     cell_tasks_[c].first = graph_.size();
     drift[c] = graph_.add(types_.drift, c, -1, c);
+    // Across ranks, the end of star formation brings in every other rank's cells: no drift
+    // of a foreign cell may still be running then.
+    if (star_formation && ranks_) graph_.depends(drift[c], star_formation_done_task_);
     if (space_.cell(c).count > 0) {
       graph_.add(types_.density_self, c, -1, c);
       for (int n : space_.neighbours(c)) dpairs.push_back({graph_.add(types_.density_pair, c, n, c), c, n});
       ghost[c] = graph_.add(types_.ghost, c, -1, c);
+      if (ranks_) {
+        // Explicit edges, not the cell's write chain: a send that is not listed this run
+        // must not cut the chain from the ghost to the force loop.
+        send_task_[c] = graph_.add(types_.send, c, -1, -1);
+        graph_.depends(ghost[c], send_task_[c]);
+        graph_.depends(send_task_[c], sends_posted_task_);
+        recv_task_[c] = graph_.add(types_.recv, c, -1, -1);
+        graph_.depends(drift[c], recv_task_[c]);
+        graph_.depends(sends_posted_task_, recv_task_[c]);
+      }
       graph_.add(types_.force_self, c, -1, c);
       for (int n : space_.neighbours(c)) fpairs.push_back({graph_.add(types_.force_pair, c, n, c), c, n});
     }
@@ -169,6 +215,7 @@ void Engine::build_graph() {
       graph_.depends(gravity_tree_task_, walk);
     }
     kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
+    if (send_task_[c] >= 0) graph_.depends(send_task_[c], kick_close[c]);
     graph_.add(types_.timestep, c, -1, c);
     const bool has_gas = space_.cell(c).count > 0;
     if (star_formation && has_gas) {
@@ -188,6 +235,7 @@ void Engine::build_graph() {
   for (const auto& p : dpairs) graph_.depends(drift[p.cj], p.task);
   for (const auto& p : fpairs) {
     graph_.depends(ghost[p.cj], p.task);
+    if (ranks_) graph_.depends(recv_task_[p.cj], p.task);
     graph_.depends(p.task, kick_close[p.cj]);
   }
   graph_.finalize();
@@ -238,6 +286,12 @@ std::size_t Engine::activate(Phase phase) {
       graph_.task(t).active = true;
       step_tasks_.push_back(t);
     }
+  const bool exchange = ranks_ && phase != Phase::Density;
+  if (exchange) {
+    plan_ghost_exchange(phase);
+    graph_.task(sends_posted_task_).active = true;
+    step_tasks_.push_back(sends_posted_task_);
+  }
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
     if (phase == Phase::Hydro)
@@ -250,7 +304,9 @@ std::size_t Engine::activate(Phase phase) {
     const auto [begin, end] = cell_tasks_[c];
     for (int t = begin; t < end; ++t) {
       auto& task = graph_.task(t);
-      task.active = task.type == types_.drift || (cell_active_[c] && allowed(task.type));
+      if (task.type == types_.send) task.active = exchange && !send_to_[static_cast<std::size_t>(c)].empty();
+      else if (task.type == types_.recv) task.active = exchange && need_recv_[static_cast<std::size_t>(c)];
+      else task.active = task.type == types_.drift || (cell_active_[c] && mine(c) && allowed(task.type));
       if (task.active) step_tasks_.push_back(t);
     }
   }
@@ -292,7 +348,8 @@ void Engine::run_graph(StepInfo* info) {
   starformation::StarFormationState* sf = sf_.get();
   if (sf) sf->time = time();
   const std::vector<int>& leaves = space_.leaves();
-  auto runner = [&ctx, &T, sf, &leaves](const tasks::Task& t) {
+  if (ranks_) post_receives();
+  auto runner = [this, &ctx, &T, sf, &leaves](const tasks::Task& t) {
     if (t.type == T.drift) integration::drift(ctx, t.ci);
     else if (t.type == T.density_self) hydro::density_self(ctx, t.ci);
     else if (t.type == T.density_pair) hydro::density_pair(ctx, t.ci, t.cj);
@@ -307,10 +364,27 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
     else if (t.type == T.star_formation) starformation::form_stars(ctx, *sf, t.ci);
     else if (t.type == T.feedback_search) starformation::find_hot_neighbours(ctx, *sf, t.ci);
-    else if (t.type == T.feedback_apply) starformation::apply_feedback(ctx, *sf, leaves);
+    else if (t.type == T.star_formation_done) {
+      // Feedback reads neighbours in any cell, as star formation left them.
+      if (ranks_) sync_owned_cells(true);
+    } else if (t.type == T.feedback_apply) {
+      if (ranks_) sync_feedback_sites();
+      starformation::apply_feedback(ctx, *sf, leaves);
+    } else if (t.type == T.send) {
+      domain::RankExchange::Buffer b;
+      MessageWriter w(b);
+      pack_ghost_results(w, space_, gas_, t.ci);
+      for (int r : send_to_[static_cast<std::size_t>(t.ci)]) ranks_->post_send(r, t.ci, b);
+    } else if (t.type == T.recv) {
+      const auto& b = ranks_->wait_recv(recv_handle_[static_cast<std::size_t>(t.ci)]);
+      MessageReader r(b);
+      unpack_ghost_results(r, space_, gas_, t.ci);
+    }
   };
-  executor_.run(graph_, runner, record_timeline_ ? &records_ : nullptr, &step_tasks_);
+  std::vector<tasks::TaskRecord>* records = record_timeline_ ? &records_ : ranks_ ? &mpi_records_ : nullptr;
+  executor_.run(graph_, runner, records, &step_tasks_);
   records_stale_ = false;
+  if (ranks_) finish_exchanges();
   collect_radiated();
   if (info) {
     info->tasks_wall_s += 1e-9 * static_cast<double>(executor_.last_wall_ns());
@@ -318,7 +392,7 @@ void Engine::run_graph(StepInfo* info) {
     info->tasks_run += step_tasks_.size();
   }
   if (ctx_->cover_exceeded) rebuild_pending_ = true;
-  if (info && ctx_->h_capped > 0) {
+  if (info && ctx_->h_capped > 0 && rank_ == 0) {
     // Harmless (the cells are recut and the next step solves h in full) but it can recur
     // every few steps in a run with promotions: the first ten are printed, then every 1000th.
     ++h_capped_steps_;
@@ -463,6 +537,132 @@ Totals Engine::totals() const {
     t.potential += 0.5 * m * dm_.potential[i];
   }
   return t;
+}
+
+// --- Across MPI ranks ---------------------------------------------------------------
+
+int Engine::rank() const { return rank_; }
+int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
+bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }
+std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
+std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
+
+void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured) {
+  const auto g = space_.top_grid();
+  const domain::TopGrid grid{g[0], g[1], g[2]};
+  const auto ntop = static_cast<std::size_t>(grid.size());
+  std::vector<double> work(ntop, 0.0);
+  if (measured.empty()) {
+    // Nothing measured yet: every particle costs the same.
+    for (std::size_t t = 0; t < ntop; ++t)
+      work[t] = static_cast<double>(space_.cell(static_cast<int>(t)).count + space_.cell(static_cast<int>(t)).dm_count);
+  } else {
+    for (const auto& [x, cost] : measured) work[static_cast<std::size_t>(space_.top_cell_at(x))] += cost;
+  }
+  // The owners stay while the grid is the same and they still share the work well enough.
+  const bool keep = top_owner_.size() == ntop &&
+                    !domain::needs_repartition(domain::imbalance(work, top_owner_, ranks_->size()),
+                                               config_.repartition_imbalance);
+  if (!keep) {
+    top_owner_ = domain::partition(domain::hilbert_order(grid), work, ranks_->size());
+    ++partitions_;
+  }
+  owner_.assign(space_.cells().size(), 0);
+  for (std::size_t c = 0; c < owner_.size(); ++c)
+    owner_[c] = top_owner_[static_cast<std::size_t>(space_.top_cell_of(static_cast<int>(c)))];
+  leaf_cost_.assign(space_.cells().size(), 0.0);
+}
+
+void Engine::plan_ghost_exchange(Phase) {
+  const std::size_t ncells = space_.cells().size();
+  send_to_.assign(ncells, {});
+  need_recv_.assign(ncells, 0);
+  // Every rank sees every cell's owner, activity and neighbours, so sender and receiver
+  // agree on each message without asking each other.
+  for (int c : space_.leaves()) {
+    if (!cell_active_[static_cast<std::size_t>(c)] || space_.cell(c).count == 0) continue;
+    const int reader = owner_[static_cast<std::size_t>(c)];
+    for (int n : space_.neighbours(c)) {
+      const auto un = static_cast<std::size_t>(n);
+      if (!cell_active_[un] || owner_[un] == reader) continue;
+      if (owner_[un] == rank_) {
+        auto& to = send_to_[un];
+        if (std::find(to.begin(), to.end(), reader) == to.end()) to.push_back(reader);
+      }
+      if (reader == rank_) need_recv_[un] = 1;
+    }
+  }
+  for (auto& to : send_to_) std::sort(to.begin(), to.end());
+}
+
+void Engine::post_receives() {
+  recv_handle_.assign(space_.cells().size(), -1);
+  for (int t : step_tasks_) {
+    const tasks::Task& task = graph_.task(t);
+    if (task.type != types_.recv) continue;
+    recv_handle_[static_cast<std::size_t>(task.ci)] =
+        ranks_->post_recv(owner_[static_cast<std::size_t>(task.ci)], task.ci, ghost_results_bytes(space_, task.ci));
+  }
+}
+
+void Engine::sync_owned_cells(bool gas_cells_only) {
+  auto sends = [&](int c, int r) {
+    const auto uc = static_cast<std::size_t>(c);
+    return cell_active_[uc] && owner_[uc] == r && (!gas_cells_only || space_.cell(c).count > 0);
+  };
+  domain::RankExchange::Buffer mine;
+  MessageWriter w(mine);
+  for (int c : space_.leaves())
+    if (sends(c, rank_)) pack_cell_state(w, space_, gas_, dm_, c);
+  const auto all = ranks_->allgather(mine);
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    MessageReader in(all[static_cast<std::size_t>(r)]);
+    for (int c : space_.leaves())
+      if (sends(c, r)) unpack_cell_state(in, space_, gas_, dm_, c);
+    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more cell state than expected", r));
+  }
+}
+
+void Engine::sync_feedback_sites() {
+  auto sends = [&](int c, int r) {
+    const auto uc = static_cast<std::size_t>(c);
+    return cell_active_[uc] && owner_[uc] == r && space_.cell(c).count > 0;
+  };
+  domain::RankExchange::Buffer mine;
+  MessageWriter w(mine);
+  for (int c : space_.leaves())
+    if (sends(c, rank_)) pack_feedback_sites(w, sf_->cells[static_cast<std::size_t>(c)]);
+  const auto all = ranks_->allgather(mine);
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    MessageReader in(all[static_cast<std::size_t>(r)]);
+    for (int c : space_.leaves())
+      if (sends(c, r)) unpack_feedback_sites(in, sf_->cells[static_cast<std::size_t>(c)]);
+    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more feedback sites than expected", r));
+  }
+}
+
+void Engine::finish_exchanges() {
+  ranks_->finish();
+  add_measured_costs();
+  // What each rank's tasks changed reaches every other rank; then the decisions every rank
+  // must take alike (recut the cells, shorten whose steps) are made from the same data.
+  sync_owned_cells(false);
+  if (config_.hydro.timestep_limiter) ranks_->min(gas_.wake_bin);
+  ctx_->cover_exceeded = ranks_->any(ctx_->cover_exceeded.load());
+  ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));
+}
+
+void Engine::add_measured_costs() {
+  const std::vector<tasks::TaskRecord>& records = record_timeline_ ? records_ : mpi_records_;
+  if (leaf_cost_.size() != space_.cells().size()) leaf_cost_.assign(space_.cells().size(), 0.0);
+  for (int t : step_tasks_) {
+    const tasks::Task& task = graph_.task(t);
+    const tasks::TaskRecord& rec = records[static_cast<std::size_t>(t)];
+    if (task.ci < 0 || rec.thread < 0 || task.type == types_.recv) continue;
+    leaf_cost_[static_cast<std::size_t>(task.ci)] += static_cast<double>(rec.end_ns - rec.start_ns);
+  }
 }
 
 }  // namespace fountain

@@ -21,6 +21,9 @@ namespace fountain {
 namespace starformation {
 struct StarFormationState;
 }
+namespace domain {
+class RankExchange;
+}
 
 // Sums over all particles (gas at predicted values), for conservation checks.
 struct Totals {
@@ -107,6 +110,20 @@ class Engine {
   void set_next_particle_id(std::uint64_t id) { next_id_ = id; }
   void set_record_timeline(bool on) { record_timeline_ = on; }
 
+  // Across MPI ranks (docs/design.md, "MPI"): every rank holds every particle, each runs the
+  // tasks of the cells it owns, and the ranks exchange what those tasks change.
+  int rank() const;
+  int ranks() const;
+  // Whether any rank says yes (the one rank's answer when alone): for decisions that every
+  // rank must take together, such as writing a restart file.
+  bool any_rank(bool yes) const;
+  // The rank owning each cell (all zero on one rank), and how often owners were chosen.
+  const std::vector<int>& owners() const { return owner_; }
+  int partitions() const { return partitions_; }
+  // Bytes and messages this rank sent since the start of the run.
+  std::uint64_t bytes_sent() const;
+  std::uint64_t messages_sent() const;
+
  private:
   enum class Phase { Density, Hydro, Full };
   void rebuild();
@@ -120,6 +137,14 @@ class Engine {
   std::size_t activate(Phase phase);
   void run_graph(StepInfo* info);
   void guess_smoothing_lengths();
+  bool mine(int c) const { return owner_.empty() || owner_[static_cast<std::size_t>(c)] == rank_; }
+  void assign_owners(const std::vector<std::pair<Vec3, double>>& measured);
+  void plan_ghost_exchange(Phase phase);
+  void post_receives();
+  void sync_owned_cells(bool gas_cells_only);  // every rank's active cells to every other rank
+  void sync_feedback_sites();
+  void finish_exchanges();
+  void add_measured_costs();
 
   RunConfig config_;
   GasParticles gas_;
@@ -150,6 +175,19 @@ class Engine {
   bool rebuild_pending_ = true;
   bool initialised_ = false;  // the first forces and timesteps are done
   bool record_timeline_ = false;
+
+  std::unique_ptr<domain::RankExchange> ranks_;   // null when running alone
+  int rank_ = 0;
+  std::vector<int> owner_;                  // per cell; empty when running alone
+  std::vector<double> leaf_cost_;           // measured task time per cell since owners were chosen (ns)
+  int partitions_ = 0;
+  std::vector<int> send_task_, recv_task_;  // per cell (-1: none)
+  int sends_posted_task_ = -1;
+  std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
+  std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
+  std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run
+  std::vector<int> top_owner_;              // per top-level cell
+  std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
 };
 
 }  // namespace fountain

@@ -27,6 +27,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.space.split_size = static_cast<int>(p.integer("space.cell_split_size"));
   c.space.top_cells = static_cast<int>(p.integer("space.top_cells"));
   c.space.skin = p.real("space.rebuild_skin");
+  c.repartition_imbalance = p.real("domain.repartition_imbalance");
   c.units.length_cgs = p.real("units.length_cgs");
   c.units.mass_cgs = p.real("units.mass_cgs");
   c.units.velocity_cgs = p.real("units.velocity_cgs");

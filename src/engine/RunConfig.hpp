@@ -40,6 +40,7 @@ struct RunConfig {
   StarFormationParams star_formation;
   IntegrationParams integration;
   SpaceConfig space;
+  double repartition_imbalance = 0.1;  // across ranks: recut owners above this imbalance
   Units units;
   OutputConfig output;
   RestartConfig restart;

@@ -6,7 +6,7 @@ namespace fountain {
 
 struct TaskTypes {
   int drift, density_self, density_pair, ghost, force_self, force_pair, gravity_tree, gravity, kick_close, timestep,
-      cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply;
+      cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply, send, recv, sends_posted;
   tasks::TaskTypeRegistry registry;
 
   TaskTypes() {
@@ -26,6 +26,10 @@ struct TaskTypes {
     star_formation_done = registry.add({"star_formation", "done", "star_formation"});
     feedback_search = registry.add({"feedback", "search", "feedback"});
     feedback_apply = registry.add({"feedback", "apply", "feedback"});
+    // Across MPI ranks: a cell's ghost results go to the ranks whose force loops read them.
+    send = registry.add({"send", "ghost", "mpi"});
+    recv = registry.add({"recv", "ghost", "mpi"});
+    sends_posted = registry.add({"send", "posted", "mpi"});
   }
 };
 

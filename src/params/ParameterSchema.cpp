@@ -113,6 +113,9 @@ const std::vector<ParamSpec>& parameter_schema() {
       integer("space.top_cells", "0", 0, 256, "Top-level cells along the longest box side; 0 chooses from the particle number."),
       real("space.rebuild_skin", "0.25", 0, 10,
            "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),
+      // domain decomposition (MPI)
+      real("domain.repartition_imbalance", "0.1", 0, inf,
+           "Across MPI ranks: when the cells are recut, their owners are chosen anew if the most loaded rank's measured work exceeds the mean by more than this fraction (0: at every recut)."),
   };
   return schema;
 }

@@ -43,6 +43,13 @@ struct CollisionlessParticles {
     time_bin.resize(n); ti_begin.resize(n);
   }
 
+  // Calls f(field) for every per-particle vector, in one fixed order (see GasParticles).
+  template <class F>
+  void for_each_field(F&& f) {
+    f(id); f(species); f(birth_time); f(parent_id); f(mass); f(x); f(v_full); f(v); f(a_grav); f(potential);
+    f(time_bin); f(ti_begin);
+  }
+
   std::size_t count(Species s) const {
     std::size_t n = 0;
     for (Species k : species) n += k == s ? 1 : 0;

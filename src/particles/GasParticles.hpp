@@ -90,6 +90,17 @@ struct GasParticles {
     wake_bin.resize(n, kNoBin);
   }
 
+  // Calls f(field) for every per-particle vector, in one fixed order (reordering, packing
+  // for other ranks): a new field is added here and in resize().
+  template <class F>
+  void for_each_field(F&& f) {
+    f(id); f(mass); f(mass_initial); f(mass_stars_hidden); f(reservoir); f(promoted); f(promotion_time);
+    f(feedback_hot_energy); f(x); f(v_full); f(u_full); f(v); f(u); f(h); f(rho); f(rho_msph); f(h_msph);
+    f(wcount); f(wcount_dh); f(div_v); f(curl_v); f(soundspeed); f(p_over_rho_a); f(inv_rho_2ma); f(balsara);
+    f(a_hydro); f(du_dt); f(du_dt_cool); f(a_grav); f(potential); f(time_bin); f(ti_begin); f(courant_bin);
+    f(limit_bin); f(wake_bin);
+  }
+
   // Mass that gravity and inertia see: gas plus hidden stars.
   double dynamical_mass(std::size_t i) const { return mass[i] + mass_stars_hidden[i]; }
 

@@ -90,6 +90,7 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
     }
     for (int k = 0; k < 3; ++k) ntop[k] = std::clamp(static_cast<int>(std::floor(size_[k] / w)), 1, 128);
   }
+  ntop_ = ntop;
   const Vec3 wtop{size_.x / ntop[0], size_.y / ntop[1], size_.z / ntop[2]};
   const std::size_t ntot = static_cast<std::size_t>(ntop[0]) * ntop[1] * ntop[2];
 
@@ -271,6 +272,13 @@ void Space::split(int c, SortState& s) {
     cells_[static_cast<std::size_t>(c)].children[o] = id;
     split(id, s);
   }
+}
+
+int Space::top_cell_at(const Vec3& x) const {
+  std::array<int, 3> ix;
+  for (int k = 0; k < 3; ++k)
+    ix[k] = std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / (size_[k] / ntop_[k]))), 0, ntop_[k] - 1);
+  return (ix[0] * ntop_[1] + ix[1]) * ntop_[2] + ix[2];
 }
 
 void Space::collect_neighbours(int leaf, int node, std::vector<int>& out) const {

@@ -1,5 +1,6 @@
 // The domain: a top-level grid of cells, each split into an octree, and neighbour-cell lists.
 #pragma once
+#include <array>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -49,6 +50,15 @@ class Space {
   const Vec3& box_lo() const { return lo_; }
   const Vec3& box_size() const { return size_; }
   int rebuild_count() const { return rebuilds_; }
+  // The top-level grid: cells 0 .. nx*ny*nz-1 are its cells, indexed (i * ny + j) * nz + k.
+  const std::array<int, 3>& top_grid() const { return ntop_; }
+  // The top-level cell that holds cell c.
+  int top_cell_of(int c) const {
+    while (cells_[static_cast<std::size_t>(c)].parent >= 0) c = cells_[static_cast<std::size_t>(c)].parent;
+    return c;
+  }
+  // The top-level cell whose box holds position x (clamped to the grid).
+  int top_cell_at(const Vec3& x) const;
 
   // Distance between the boxes of two cells (nearest periodic image).
   double box_distance(const Cell& a, const Cell& b) const;
@@ -63,6 +73,7 @@ class Space {
   Vec3 lo_, size_, half_;
   std::vector<Cell> cells_;
   std::vector<int> top_;
+  std::array<int, 3> ntop_{1, 1, 1};
   std::vector<int> leaves_;
   std::vector<int> leaf_slot_;
   std::vector<std::vector<int>> neighbours_;

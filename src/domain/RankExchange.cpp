@@ -1,0 +1,193 @@
+#include "domain/RankExchange.hpp"
+
+#include <deque>
+#include <stdexcept>
+
+#ifdef FOUNTAIN_HAVE_MPI
+#include <mpi.h>
+#endif
+
+namespace fountain::domain {
+
+#ifdef FOUNTAIN_HAVE_MPI
+struct RankExchange::Impl {
+  MPI_Comm comm = MPI_COMM_NULL;
+  struct Pending {
+    MPI_Request request = MPI_REQUEST_NULL;
+    Buffer data;
+    bool done = false;
+  };
+  std::deque<Pending> recvs;  // a deque: handles stay valid while more are posted
+  std::deque<Pending> sends;
+};
+
+namespace {
+void check(int err, const char* what) {
+  if (err != MPI_SUCCESS) throw std::runtime_error(std::string("MPI call failed: ") + what);
+}
+int as_count(std::size_t n) {
+  if (n > static_cast<std::size_t>(INT32_MAX)) throw std::runtime_error("MPI message over 2 GiB");
+  return static_cast<int>(n);
+}
+}  // namespace
+
+std::unique_ptr<RankExchange> RankExchange::world() {
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) return nullptr;
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  if (size < 2) return nullptr;
+  std::unique_ptr<RankExchange> r(new RankExchange());
+  r->impl_ = std::make_unique<Impl>();
+  MPI_Comm_dup(MPI_COMM_WORLD, &r->impl_->comm);
+  MPI_Comm_rank(r->impl_->comm, &r->rank_);
+  r->size_ = size;
+  return r;
+}
+
+RankExchange::~RankExchange() {
+  if (!impl_) return;
+  int finalised = 0;
+  MPI_Finalized(&finalised);
+  if (finalised) return;
+  for (auto& p : impl_->recvs)
+    if (!p.done && p.request != MPI_REQUEST_NULL) {
+      MPI_Cancel(&p.request);
+      MPI_Request_free(&p.request);
+    }
+  for (auto& p : impl_->sends)
+    if (p.request != MPI_REQUEST_NULL) MPI_Request_free(&p.request);
+  MPI_Comm_free(&impl_->comm);
+}
+
+bool RankExchange::any(bool local) const {
+  int in = local ? 1 : 0, out = 0;
+  check(MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_LOR, impl_->comm), "Allreduce(any)");
+  return out != 0;
+}
+
+long long RankExchange::sum(long long local) const {
+  long long out = 0;
+  check(MPI_Allreduce(&local, &out, 1, MPI_LONG_LONG, MPI_SUM, impl_->comm), "Allreduce(sum)");
+  return out;
+}
+
+void RankExchange::sum(std::span<double> values) const {
+  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), as_count(values.size()), MPI_DOUBLE, MPI_SUM, impl_->comm),
+        "Allreduce(sum)");
+}
+
+void RankExchange::min(std::span<std::int8_t> values) const {
+  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), as_count(values.size()), MPI_INT8_T, MPI_MIN, impl_->comm),
+        "Allreduce(min)");
+  std::lock_guard lock(mutex_);
+  traffic_.bytes += values.size();
+  ++traffic_.messages;
+}
+
+std::vector<RankExchange::Buffer> RankExchange::allgather(const Buffer& mine) const {
+  const int n = size_;
+  long long my_size = static_cast<long long>(mine.size());
+  std::vector<long long> sizes(static_cast<std::size_t>(n));
+  check(MPI_Allgather(&my_size, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, impl_->comm), "Allgather(sizes)");
+  std::vector<int> counts(static_cast<std::size_t>(n)), offsets(static_cast<std::size_t>(n));
+  std::size_t total = 0;
+  for (int r = 0; r < n; ++r) {
+    counts[static_cast<std::size_t>(r)] = as_count(static_cast<std::size_t>(sizes[static_cast<std::size_t>(r)]));
+    offsets[static_cast<std::size_t>(r)] = as_count(total);
+    total += static_cast<std::size_t>(sizes[static_cast<std::size_t>(r)]);
+  }
+  Buffer all(total);
+  check(MPI_Allgatherv(mine.data(), as_count(mine.size()), MPI_BYTE, all.data(), counts.data(), offsets.data(),
+                       MPI_BYTE, impl_->comm),
+        "Allgatherv");
+  std::vector<Buffer> out(static_cast<std::size_t>(n));
+  for (int r = 0; r < n; ++r) {
+    const auto o = static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]);
+    out[static_cast<std::size_t>(r)].assign(all.begin() + static_cast<std::ptrdiff_t>(o),
+                                            all.begin() + static_cast<std::ptrdiff_t>(o) + counts[static_cast<std::size_t>(r)]);
+  }
+  std::lock_guard lock(mutex_);
+  traffic_.bytes += mine.size() * static_cast<std::size_t>(n - 1);
+  traffic_.messages += static_cast<std::uint64_t>(n - 1);
+  return out;
+}
+
+void RankExchange::broadcast(Buffer& data) const {
+  long long n = static_cast<long long>(data.size());
+  check(MPI_Bcast(&n, 1, MPI_LONG_LONG, 0, impl_->comm), "Bcast(size)");
+  data.resize(static_cast<std::size_t>(n));
+  check(MPI_Bcast(data.data(), as_count(data.size()), MPI_BYTE, 0, impl_->comm), "Bcast");
+}
+
+int RankExchange::post_recv(int source, int tag, std::size_t bytes) {
+  auto& p = impl_->recvs.emplace_back();
+  p.data.resize(bytes);
+  check(MPI_Irecv(p.data.data(), as_count(bytes), MPI_BYTE, source, tag, impl_->comm, &p.request), "Irecv");
+  return static_cast<int>(impl_->recvs.size()) - 1;
+}
+
+bool RankExchange::test_recv(int handle) {
+  auto& p = impl_->recvs[static_cast<std::size_t>(handle)];
+  if (p.done) return true;
+  int flag = 0;
+  check(MPI_Test(&p.request, &flag, MPI_STATUS_IGNORE), "Test");
+  p.done = flag != 0;
+  return p.done;
+}
+
+const RankExchange::Buffer& RankExchange::wait_recv(int handle) {
+  auto& p = impl_->recvs[static_cast<std::size_t>(handle)];
+  if (!p.done) check(MPI_Wait(&p.request, MPI_STATUS_IGNORE), "Wait");
+  p.done = true;
+  return p.data;
+}
+
+void RankExchange::post_send(int dest, int tag, Buffer data) {
+  std::lock_guard lock(mutex_);
+  auto& p = impl_->sends.emplace_back();
+  p.data = std::move(data);
+  check(MPI_Isend(p.data.data(), as_count(p.data.size()), MPI_BYTE, dest, tag, impl_->comm, &p.request), "Isend");
+  traffic_.bytes += p.data.size();
+  ++traffic_.messages;
+}
+
+void RankExchange::finish() {
+  for (auto& p : impl_->sends) check(MPI_Wait(&p.request, MPI_STATUS_IGNORE), "Wait(send)");
+  impl_->sends.clear();
+  for (auto& p : impl_->recvs)
+    if (!p.done) throw std::logic_error("a posted receive was never completed");
+  impl_->recvs.clear();
+}
+#else
+struct RankExchange::Impl {};
+std::unique_ptr<RankExchange> RankExchange::world() { return nullptr; }
+RankExchange::~RankExchange() = default;
+namespace {
+[[noreturn]] void no_mpi() { throw std::logic_error("built without MPI"); }
+}  // namespace
+bool RankExchange::any(bool) const { no_mpi(); }
+long long RankExchange::sum(long long) const { no_mpi(); }
+void RankExchange::sum(std::span<double>) const { no_mpi(); }
+void RankExchange::min(std::span<std::int8_t>) const { no_mpi(); }
+std::vector<RankExchange::Buffer> RankExchange::allgather(const Buffer&) const { no_mpi(); }
+void RankExchange::broadcast(Buffer&) const { no_mpi(); }
+int RankExchange::post_recv(int, int, std::size_t) { no_mpi(); }
+bool RankExchange::test_recv(int) { no_mpi(); }
+const RankExchange::Buffer& RankExchange::wait_recv(int) { no_mpi(); }
+void RankExchange::post_send(int, int, Buffer) { no_mpi(); }
+void RankExchange::finish() { no_mpi(); }
+#endif
+
+RankExchange::Traffic RankExchange::traffic() const {
+  std::lock_guard lock(mutex_);
+  return traffic_;
+}
+
+void RankExchange::reset_traffic() {
+  std::lock_guard lock(mutex_);
+  traffic_ = {};
+}
+
+}  // namespace fountain::domain

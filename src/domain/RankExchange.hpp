@@ -1,0 +1,63 @@
+// Messages between the MPI ranks of one run: the collectives and byte messages the engine's exchanges need.
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <vector>
+
+namespace fountain::domain {
+
+// Wraps its own duplicate of MPI_COMM_WORLD, so the engine's messages never meet anyone
+// else's. Collectives are called by one thread at a time (the engine's step, or a task that
+// every other task of its kind waits for); point-to-point calls may come from any worker
+// thread at once (MPI is initialised with MPI_THREAD_MULTIPLE).
+class RankExchange {
+ public:
+  using Buffer = std::vector<char>;
+
+  // The ranks of this run, or null when the process runs alone (MPI not started by a
+  // launcher, one rank, or a build without MPI).
+  static std::unique_ptr<RankExchange> world();
+  ~RankExchange();
+  RankExchange(const RankExchange&) = delete;
+  RankExchange& operator=(const RankExchange&) = delete;
+
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+
+  bool any(bool local) const;
+  long long sum(long long local) const;
+  void sum(std::span<double> values) const;        // element by element, in place
+  void min(std::span<std::int8_t> values) const;   // element by element, in place
+  // Every rank's buffer, indexed by rank (this rank's own included).
+  std::vector<Buffer> allgather(const Buffer& mine) const;
+  // Rank 0's buffer, on every rank.
+  void broadcast(Buffer& data) const;
+
+  // Point to point: receives are posted before the tasks that need them run (their handle
+  // is an index), sends are posted by tasks and completed together once the graph is done.
+  int post_recv(int source, int tag, std::size_t bytes);
+  bool test_recv(int handle);            // non-blocking: has it arrived?
+  const Buffer& wait_recv(int handle);   // blocks until it has
+  void post_send(int dest, int tag, Buffer data);
+  void finish();                         // waits for every send, forgets every receive
+
+  // Counted since the last reset: point-to-point and collective payload, sent by this rank.
+  struct Traffic {
+    std::uint64_t bytes = 0, messages = 0;
+  };
+  Traffic traffic() const;
+  void reset_traffic();
+
+ private:
+  RankExchange() = default;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  int rank_ = 0, size_ = 1;
+  mutable std::mutex mutex_;  // guards the send list and the traffic counts
+  mutable Traffic traffic_;
+};
+
+}  // namespace fountain::domain

@@ -1,0 +1,90 @@
+#include "engine/CellMessages.hpp"
+
+namespace fountain {
+
+static_assert(std::is_trivially_copyable_v<Cell>);
+static_assert(std::is_trivially_copyable_v<starformation::FeedbackSite>);
+static_assert(std::is_trivially_copyable_v<starformation::StarFormationTally>);
+
+namespace {
+// Packs or unpacks the slice [first, first + count) of each field it is handed.
+struct PackSlice {
+  MessageWriter& w;
+  std::size_t first, count;
+  const void* skip = nullptr;
+  template <class T>
+  void operator()(std::vector<T>& f) const {
+    if (static_cast<const void*>(&f) != skip) w.put(f.data() + first, count);
+  }
+};
+struct UnpackSlice {
+  MessageReader& r;
+  std::size_t first, count;
+  const void* skip = nullptr;
+  template <class T>
+  void operator()(std::vector<T>& f) const {
+    if (static_cast<const void*>(&f) != skip) r.get(f.data() + first, count);
+  }
+};
+
+template <class F>
+void ghost_fields(GasParticles& g, F&& f) {
+  f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
+  f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
+}
+}  // namespace
+
+void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c) {
+  const Cell& cell = space.cell(c);
+  w.put(cell);
+  gas.for_each_field(PackSlice{w, cell.first, cell.count, &gas.wake_bin});
+  dm.for_each_field(PackSlice{w, cell.dm_first, cell.dm_count});
+}
+
+void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c) {
+  Cell& cell = space.cell(c);
+  const Cell sent = r.get<Cell>();
+  if (sent.first != cell.first || sent.count != cell.count || sent.dm_first != cell.dm_first ||
+      sent.dm_count != cell.dm_count)
+    throw std::logic_error("ranks disagree on a cell's particles");
+  cell = sent;
+  gas.for_each_field(UnpackSlice{r, cell.first, cell.count, &gas.wake_bin});
+  dm.for_each_field(UnpackSlice{r, cell.dm_first, cell.dm_count});
+}
+
+void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
+  const Cell& cell = space.cell(c);
+  w.put(cell.h_max);
+  ghost_fields(gas, PackSlice{w, cell.first, cell.count});
+}
+
+void unpack_ghost_results(MessageReader& r, Space& space, GasParticles& gas, int c) {
+  Cell& cell = space.cell(c);
+  cell.h_max = r.get<double>();
+  ghost_fields(gas, UnpackSlice{r, cell.first, cell.count});
+}
+
+std::size_t ghost_results_bytes(const Space& space, int c) {
+  std::size_t per = 0;
+  GasParticles none;
+  ghost_fields(none, [&](auto& f) { per += sizeof(typename std::decay_t<decltype(f)>::value_type); });
+  return sizeof(double) + per * space.cell(c).count;
+}
+
+void pack_feedback_sites(MessageWriter& w, const starformation::CellFeedback& cf) {
+  w.put(cf.tally);
+  w.put(cf.sites.size());
+  w.put(cf.sites.data(), cf.sites.size());
+  w.put(cf.neighbours.size());
+  w.put(cf.neighbours.data(), cf.neighbours.size());
+}
+
+void unpack_feedback_sites(MessageReader& r, starformation::CellFeedback& cf) {
+  cf.tally = r.get<starformation::StarFormationTally>();
+  cf.sites.resize(r.get<std::size_t>());
+  r.get(cf.sites.data(), cf.sites.size());
+  cf.neighbours.resize(r.get<std::size_t>());
+  r.get(cf.neighbours.data(), cf.neighbours.size());
+}
+
+}  // namespace fountain

@@ -1,0 +1,74 @@
+// What ranks send each other about a cell: its whole state, its ghost's results, its feedback sites; packed as bytes.
+#pragma once
+#include <cstddef>
+#include <cstring>
+#include <stdexcept>
+#include <type_traits>
+#include <vector>
+
+#include "particles/CollisionlessParticles.hpp"
+#include "particles/GasParticles.hpp"
+#include "space/Space.hpp"
+#include "starformation/StarFormationLoop.hpp"
+
+namespace fountain {
+
+// Appends plain values to a byte buffer.
+class MessageWriter {
+ public:
+  explicit MessageWriter(std::vector<char>& out) : out_(out) {}
+  template <class T>
+  void put(const T* values, std::size_t n) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const std::size_t at = out_.size();
+    out_.resize(at + n * sizeof(T));
+    if (n > 0) std::memcpy(out_.data() + at, values, n * sizeof(T));
+  }
+  template <class T>
+  void put(const T& value) { put(&value, 1); }
+
+ private:
+  std::vector<char>& out_;
+};
+
+// Reads them back in the same order; running past the end is a logic error (the two ranks
+// disagree on what a message holds), reported rather than read.
+class MessageReader {
+ public:
+  explicit MessageReader(const std::vector<char>& in) : in_(in) {}
+  template <class T>
+  void get(T* values, std::size_t n) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (at_ + n * sizeof(T) > in_.size()) throw std::logic_error("message shorter than its reader expects");
+    if (n > 0) std::memcpy(values, in_.data() + at_, n * sizeof(T));
+    at_ += n * sizeof(T);
+  }
+  template <class T>
+  T get() {
+    T v;
+    get(&v, 1);
+    return v;
+  }
+  bool done() const { return at_ == in_.size(); }
+
+ private:
+  const std::vector<char>& in_;
+  std::size_t at_ = 0;
+};
+
+// Everything about leaf c: the cell's own record and every field of its gas and collisionless
+// particles, except the gas's wake requests (which any rank may make of any particle, and
+// which the engine combines across ranks separately).
+void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c);
+void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c);
+
+// What leaf c's ghost computed, which other cells' force loops read.
+void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c);
+void unpack_ghost_results(MessageReader& r, Space& space, GasParticles& gas, int c);
+std::size_t ghost_results_bytes(const Space& space, int c);
+
+// Leaf c's feedback sites and their hot neighbours (particle indices, the same on every rank).
+void pack_feedback_sites(MessageWriter& w, const starformation::CellFeedback& cf);
+void unpack_feedback_sites(MessageReader& r, starformation::CellFeedback& cf);
+
+}  // namespace fountain
