@@ -15,6 +15,8 @@
 #include <exception>
 #include <stdexcept>
 #include <chrono>
+#include <thread>
+#include <algorithm>
 
 namespace fountain::tasks {
 
@@ -43,7 +45,7 @@ Executor::Executor(int threads)
 Executor::~Executor() = default;
 
 void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records,
-                   const std::vector<int>* only) {
+                   const std::vector<int>* only, const Gates* gates) {
   const int n = graph.size();
   std::vector<std::atomic<int>> wait(static_cast<std::size_t>(n));
   // Which tasks take part: all of them, or the listed ones.
@@ -65,6 +67,22 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     for (int t = 0; t < n; ++t) count_unlocks(t);
   }
   if (records) records->assign(static_cast<std::size_t>(n), TaskRecord{});
+  // A gate is one more predecessor, released by the polling loop below.
+  std::vector<int> pending;
+  if (gates)
+    for (int t : gates->tasks)
+      if (takes_part(t)) {
+        wait[static_cast<std::size_t>(t)].fetch_add(1, std::memory_order_relaxed);
+        pending.push_back(t);
+      }
+  if (!pending.empty() && !polling_arena_) {
+    polling_parallelism_ = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism,
+        std::max<std::size_t>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+                              static_cast<std::size_t>(threads_) + 1));
+    polling_arena_ = std::make_unique<tbb::task_arena>(threads_ + 1);
+  }
+  tbb::task_arena& arena = pending.empty() ? *arena_ : *polling_arena_;
 
   std::atomic<std::int64_t> busy{0};
   std::atomic<int> done{0};
@@ -77,7 +95,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   std::exception_ptr error;
   const std::int64_t t0 = now_ns();
 
-  arena_->execute([&] {
+  arena.execute([&] {
     tbb::task_group group;
     // Runs task `first` and then, in this thread, whatever it readies, spawning the rest.
     std::function<void(int)> process;
@@ -136,6 +154,30 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     }
     go.store(true, std::memory_order_release);
     for (int t : roots) spawn(t);
+    // Poll the gates until every one has opened (or a task failed), sleeping briefly when
+    // none did, then help finish.
+    while (!pending.empty() && !failed.load()) {
+      bool opened = false;
+      for (std::size_t k = 0; k < pending.size();) {
+        const int t = pending[k];
+        bool arrived = false;
+        try {
+          arrived = gates->arrived(t);
+        } catch (...) {
+          if (!failed.exchange(true)) error = std::current_exception();
+          break;
+        }
+        if (!arrived) {
+          ++k;
+          continue;
+        }
+        opened = true;
+        pending[k] = pending.back();
+        pending.pop_back();
+        if (wait[static_cast<std::size_t>(t)].fetch_sub(1, std::memory_order_acq_rel) == 1) spawn(t);
+      }
+      if (!opened) std::this_thread::sleep_for(std::chrono::microseconds(20));
+    }
     group.wait();
     (void)done.load(std::memory_order_acquire);  // every job's writes, before `process` goes
   });

@@ -5,6 +5,7 @@
 #include <memory>
 #include <vector>
 
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include "TaskGraph.hpp"
@@ -30,6 +31,16 @@ class Executor {
   int threads() const { return threads_; }
 
   using Runner = std::function<void(const Task&)>;
+
+  // Tasks that also wait for something outside the graph, such as a message from another
+  // rank: each runs only once `arrived(task)` has said yes (and its predecessors are done).
+  // The calling thread polls `arrived` and runs no tasks meanwhile (the run then has a
+  // thread more, so as many compute), so no worker thread ever blocks on a message.
+  struct Gates {
+    std::vector<int> tasks;
+    std::function<bool(int)> arrived;
+  };
+
   // Runs every active task of `graph` once its predecessors have finished; inactive tasks
   // pass their unlocks on at once. Fills `records` (one per task) when it is non-null.
   // An exception thrown by a task is rethrown here after the running tasks have stopped.
@@ -39,7 +50,7 @@ class Executor {
   // caller promises that every ordering that matters between listed tasks is a direct
   // dependency (or a chain of listed tasks).
   void run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records = nullptr,
-           const std::vector<int>* only = nullptr);
+           const std::vector<int>* only = nullptr, const Gates* gates = nullptr);
 
   // Runs fn(0..n-1) in parallel on this executor's threads (for simple per-cell sweeps).
   void for_each(std::size_t n, const std::function<void(std::size_t)>& fn);
@@ -51,6 +62,9 @@ class Executor {
  private:
   int threads_;
   std::unique_ptr<tbb::task_arena> arena_;
+  // For runs with gates: `threads_` workers beside the polling caller (made when first needed).
+  std::unique_ptr<tbb::global_control> polling_parallelism_;
+  std::unique_ptr<tbb::task_arena> polling_arena_;
   std::vector<char> listed_;  // scratch for `only`: which tasks are listed
   std::int64_t last_wall_ns_ = 0;
   std::int64_t last_busy_ns_ = 0;

@@ -181,11 +181,10 @@ void Engine::build_graph() {
   fpairs.reserve(npairs);
   cell_tasks_.assign(ncells, {-1, -1});
   // Across ranks: a cell's ghost results are sent once its ghost is done; a foreign cell's
-  // arrive by a receive that its readers wait for. Receives wait until every send of this
-  // rank is posted, so no rank can block on a message while holding back one another awaits.
+  // arrive by a receive that its readers wait for. A receive runs only once its message is
+  // in (the executor polls for it), so no worker blocks and every rank's sends go out.
   send_task_.assign(ncells, -1);
   recv_task_.assign(ncells, -1);
-  sends_posted_task_ = ranks_ ? graph_.add(types_.sends_posted, -1, -1, -1) : -1;
   for (int c : leaves) {
     cell_tasks_[c].first = graph_.size();
     drift[c] = graph_.add(types_.drift, c, -1, c);
@@ -201,10 +200,8 @@ void Engine::build_graph() {
         // must not cut the chain from the ghost to the force loop.
         send_task_[c] = graph_.add(types_.send, c, -1, -1);
         graph_.depends(ghost[c], send_task_[c]);
-        graph_.depends(send_task_[c], sends_posted_task_);
         recv_task_[c] = graph_.add(types_.recv, c, -1, -1);
         graph_.depends(drift[c], recv_task_[c]);
-        graph_.depends(sends_posted_task_, recv_task_[c]);
       }
       graph_.add(types_.force_self, c, -1, c);
       for (int n : space_.neighbours(c)) fpairs.push_back({graph_.add(types_.force_pair, c, n, c), c, n});
@@ -287,11 +284,7 @@ std::size_t Engine::activate(Phase phase) {
       step_tasks_.push_back(t);
     }
   const bool exchange = ranks_ && phase != Phase::Density;
-  if (exchange) {
-    plan_ghost_exchange(phase);
-    graph_.task(sends_posted_task_).active = true;
-    step_tasks_.push_back(sends_posted_task_);
-  }
+  if (exchange) plan_ghost_exchange(phase);
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
     if (phase == Phase::Hydro)
@@ -382,7 +375,13 @@ void Engine::run_graph(StepInfo* info) {
     }
   };
   std::vector<tasks::TaskRecord>* records = record_timeline_ ? &records_ : ranks_ ? &mpi_records_ : nullptr;
-  executor_.run(graph_, runner, records, &step_tasks_);
+  tasks::Executor::Gates gates;
+  if (ranks_) {
+    for (int t : step_tasks_)
+      if (graph_.task(t).type == types_.recv) gates.tasks.push_back(t);
+    gates.arrived = [this](int t) { return ranks_->test_recv(recv_handle_[static_cast<std::size_t>(graph_.task(t).ci)]); };
+  }
+  executor_.run(graph_, runner, records, &step_tasks_, gates.tasks.empty() ? nullptr : &gates);
   records_stale_ = false;
   if (ranks_) finish_exchanges();
   collect_radiated();

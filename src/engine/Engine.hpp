@@ -182,7 +182,6 @@ class Engine {
   std::vector<double> leaf_cost_;           // measured task time per cell since owners were chosen (ns)
   int partitions_ = 0;
   std::vector<int> send_task_, recv_task_;  // per cell (-1: none)
-  int sends_posted_task_ = -1;
   std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
   std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run

@@ -6,7 +6,7 @@ namespace fountain {
 
 struct TaskTypes {
   int drift, density_self, density_pair, ghost, force_self, force_pair, gravity_tree, gravity, kick_close, timestep,
-      cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply, send, recv, sends_posted;
+      cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply, send, recv;
   tasks::TaskTypeRegistry registry;
 
   TaskTypes() {
@@ -29,7 +29,6 @@ struct TaskTypes {
     // Across MPI ranks: a cell's ghost results go to the ranks whose force loops read them.
     send = registry.add({"send", "ghost", "mpi"});
     recv = registry.add({"recv", "ghost", "mpi"});
-    sends_posted = registry.add({"send", "posted", "mpi"});
   }
 };
 
