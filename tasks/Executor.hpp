@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -33,12 +34,13 @@ class Executor {
   using Runner = std::function<void(const Task&)>;
 
   // Tasks that also wait for something outside the graph, such as a message from another
-  // rank: each runs only once `arrived(task)` has said yes (and its predecessors are done).
-  // The calling thread polls `arrived` and runs no tasks meanwhile (the run then has a
-  // thread more, so as many compute), so no worker thread ever blocks on a message.
+  // rank: each runs only once `poll` has named it (and its predecessors are done). `poll`
+  // is handed the tasks still waiting and appends those whose condition now holds; it is
+  // called by the calling thread, which runs no tasks meanwhile (the run then has a thread
+  // more, so as many compute), so no worker thread ever blocks on a message.
   struct Gates {
     std::vector<int> tasks;
-    std::function<bool(int)> arrived;
+    std::function<void(std::span<const int> waiting, std::vector<int>& opened)> poll;
   };
 
   // Runs every active task of `graph` once its predecessors have finished; inactive tasks

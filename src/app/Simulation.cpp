@@ -262,6 +262,8 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   summary.partitions = engine.partitions();
   summary.bytes_sent = engine.bytes_sent();
   summary.messages_sent = engine.messages_sent();
+  summary.graph_s = engine.graph_seconds();
+  summary.exchange_s = engine.exchange_seconds();
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return summary;
 }

@@ -19,6 +19,7 @@ struct RunSummary {
   int ranks = 1;
   int partitions = 0;
   std::uint64_t bytes_sent = 0, messages_sent = 0;
+  double graph_s = 0.0, exchange_s = 0.0;  // this rank: in task graphs, in the exchanges after them
 };
 
 // Runs the parameter file's problem to run.t_end, or continues it from its restart file

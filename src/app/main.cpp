@@ -76,8 +76,11 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
       if (mpi.rank() == 0 && s.ranks > 1)
-        fmt::print(stderr, "ranks: {}, cell owners chosen {} times; rank 0 sent {:.3g} MB in {} messages\n", s.ranks,
-                   s.partitions, 1e-6 * static_cast<double>(s.bytes_sent), s.messages_sent);
+        fmt::print(stderr,
+                   "ranks: {}, cell owners chosen {} times; rank 0 sent {:.3g} MB in {} messages, spent {:.2f} s in "
+                   "task graphs and {:.2f} s in the exchanges after them\n",
+                   s.ranks, s.partitions, 1e-6 * static_cast<double>(s.bytes_sent), s.messages_sent, s.graph_s,
+                   s.exchange_s);
     } else if (*ic) {
       if (problem == "sphere") {
         if (resolution > 0) sphere.particles_per_species = resolution;

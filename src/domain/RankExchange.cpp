@@ -86,28 +86,25 @@ void RankExchange::min(std::span<std::int8_t> values) const {
   ++traffic_.messages;
 }
 
-std::vector<RankExchange::Buffer> RankExchange::allgather(const Buffer& mine) const {
+std::vector<std::span<const char>> RankExchange::allgather(std::span<const char> mine) const {
   const int n = size_;
   long long my_size = static_cast<long long>(mine.size());
   std::vector<long long> sizes(static_cast<std::size_t>(n));
   check(MPI_Allgather(&my_size, 1, MPI_LONG_LONG, sizes.data(), 1, MPI_LONG_LONG, impl_->comm), "Allgather(sizes)");
   std::vector<int> counts(static_cast<std::size_t>(n)), offsets(static_cast<std::size_t>(n));
   std::size_t total = 0;
-  for (int r = 0; r < n; ++r) {
-    counts[static_cast<std::size_t>(r)] = as_count(static_cast<std::size_t>(sizes[static_cast<std::size_t>(r)]));
-    offsets[static_cast<std::size_t>(r)] = as_count(total);
-    total += static_cast<std::size_t>(sizes[static_cast<std::size_t>(r)]);
+  for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r) {
+    counts[r] = as_count(static_cast<std::size_t>(sizes[r]));
+    offsets[r] = as_count(total);
+    total += static_cast<std::size_t>(sizes[r]);
   }
-  Buffer all(total);
-  check(MPI_Allgatherv(mine.data(), as_count(mine.size()), MPI_BYTE, all.data(), counts.data(), offsets.data(),
+  if (gathered_.size() < total) gathered_.resize(total);
+  check(MPI_Allgatherv(mine.data(), as_count(mine.size()), MPI_BYTE, gathered_.data(), counts.data(), offsets.data(),
                        MPI_BYTE, impl_->comm),
         "Allgatherv");
-  std::vector<Buffer> out(static_cast<std::size_t>(n));
-  for (int r = 0; r < n; ++r) {
-    const auto o = static_cast<std::size_t>(offsets[static_cast<std::size_t>(r)]);
-    out[static_cast<std::size_t>(r)].assign(all.begin() + static_cast<std::ptrdiff_t>(o),
-                                            all.begin() + static_cast<std::ptrdiff_t>(o) + counts[static_cast<std::size_t>(r)]);
-  }
+  std::vector<std::span<const char>> out(static_cast<std::size_t>(n));
+  for (std::size_t r = 0; r < static_cast<std::size_t>(n); ++r)
+    out[r] = std::span<const char>(gathered_.data() + offsets[r], static_cast<std::size_t>(counts[r]));
   std::lock_guard lock(mutex_);
   traffic_.bytes += mine.size() * static_cast<std::size_t>(n - 1);
   traffic_.messages += static_cast<std::uint64_t>(n - 1);
@@ -135,6 +132,34 @@ bool RankExchange::test_recv(int handle) {
   check(MPI_Test(&p.request, &flag, MPI_STATUS_IGNORE), "Test");
   p.done = flag != 0;
   return p.done;
+}
+
+void RankExchange::test_recvs(std::span<const int> handles, std::vector<int>& arrived) {
+  std::vector<MPI_Request> requests;
+  std::vector<int> which;
+  requests.reserve(handles.size());
+  for (int h : handles) {
+    auto& p = impl_->recvs[static_cast<std::size_t>(h)];
+    if (p.done) {
+      arrived.push_back(h);
+    } else {
+      requests.push_back(p.request);
+      which.push_back(h);
+    }
+  }
+  if (requests.empty()) return;
+  std::vector<int> indices(requests.size());
+  int count = 0;
+  check(MPI_Testsome(static_cast<int>(requests.size()), requests.data(), &count, indices.data(), MPI_STATUSES_IGNORE),
+        "Testsome");
+  if (count == MPI_UNDEFINED) return;
+  for (int k = 0; k < count; ++k) {
+    const int h = which[static_cast<std::size_t>(indices[static_cast<std::size_t>(k)])];
+    auto& p = impl_->recvs[static_cast<std::size_t>(h)];
+    p.request = MPI_REQUEST_NULL;
+    p.done = true;
+    arrived.push_back(h);
+  }
 }
 
 const RankExchange::Buffer& RankExchange::wait_recv(int handle) {
@@ -171,10 +196,11 @@ bool RankExchange::any(bool) const { no_mpi(); }
 long long RankExchange::sum(long long) const { no_mpi(); }
 void RankExchange::sum(std::span<double>) const { no_mpi(); }
 void RankExchange::min(std::span<std::int8_t>) const { no_mpi(); }
-std::vector<RankExchange::Buffer> RankExchange::allgather(const Buffer&) const { no_mpi(); }
+std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>) const { no_mpi(); }
 void RankExchange::broadcast(Buffer&) const { no_mpi(); }
 int RankExchange::post_recv(int, int, std::size_t) { no_mpi(); }
 bool RankExchange::test_recv(int) { no_mpi(); }
+void RankExchange::test_recvs(std::span<const int>, std::vector<int>&) { no_mpi(); }
 const RankExchange::Buffer& RankExchange::wait_recv(int) { no_mpi(); }
 void RankExchange::post_send(int, int, Buffer) { no_mpi(); }
 void RankExchange::finish() { no_mpi(); }

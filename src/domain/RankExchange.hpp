@@ -31,8 +31,9 @@ class RankExchange {
   long long sum(long long local) const;
   void sum(std::span<double> values) const;        // element by element, in place
   void min(std::span<std::int8_t> values) const;   // element by element, in place
-  // Every rank's buffer, indexed by rank (this rank's own included).
-  std::vector<Buffer> allgather(const Buffer& mine) const;
+  // Every rank's buffer, indexed by rank (this rank's own included): views into storage
+  // kept and reused by the exchange, valid until its next allgather.
+  std::vector<std::span<const char>> allgather(std::span<const char> mine) const;
   // Rank 0's buffer, on every rank.
   void broadcast(Buffer& data) const;
 
@@ -40,6 +41,9 @@ class RankExchange {
   // is an index), sends are posted by tasks and completed together once the graph is done.
   int post_recv(int source, int tag, std::size_t bytes);
   bool test_recv(int handle);            // non-blocking: has it arrived?
+  // Non-blocking, one test for many: appends to `arrived` the handles among `handles` whose
+  // message is in.
+  void test_recvs(std::span<const int> handles, std::vector<int>& arrived);
   const Buffer& wait_recv(int handle);   // blocks until it has
   void post_send(int dest, int tag, Buffer data);
   void finish();                         // waits for every send, forgets every receive
@@ -58,6 +62,7 @@ class RankExchange {
   int rank_ = 0, size_ = 1;
   mutable std::mutex mutex_;  // guards the send list and the traffic counts
   mutable Traffic traffic_;
+  mutable std::vector<char> gathered_;  // reused by allgather, so large exchanges do not fault in fresh pages
 };
 
 }  // namespace fountain::domain

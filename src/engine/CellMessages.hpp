@@ -2,6 +2,7 @@
 #pragma once
 #include <cstddef>
 #include <cstring>
+#include <span>
 #include <stdexcept>
 #include <type_traits>
 #include <vector>
@@ -35,7 +36,7 @@ class MessageWriter {
 // disagree on what a message holds), reported rather than read.
 class MessageReader {
  public:
-  explicit MessageReader(const std::vector<char>& in) : in_(in) {}
+  explicit MessageReader(std::span<const char> in) : in_(in) {}
   template <class T>
   void get(T* values, std::size_t n) {
     static_assert(std::is_trivially_copyable_v<T>);
@@ -52,7 +53,7 @@ class MessageReader {
   bool done() const { return at_ == in_.size(); }
 
  private:
-  const std::vector<char>& in_;
+  std::span<const char> in_;
   std::size_t at_ = 0;
 };
 

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <unordered_map>
 
 #include "analysis/Diagnostics.hpp"
 #include "core/Error.hpp"
@@ -117,8 +119,10 @@ void Engine::rebuild() {
     for (int c : space_.leaves())
       if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
   }
+  const auto t_rebuild = std::chrono::steady_clock::now();
   space_.rebuild(gas_, dm_);
   if (ranks_) assign_owners(measured);
+  rebuild_s_ += seconds_since(t_rebuild);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
   auto step_end = [&](TimeBin bin, IntegerTime ti_begin) {
@@ -379,9 +383,21 @@ void Engine::run_graph(StepInfo* info) {
   if (ranks_) {
     for (int t : step_tasks_)
       if (graph_.task(t).type == types_.recv) gates.tasks.push_back(t);
-    gates.arrived = [this](int t) { return ranks_->test_recv(recv_handle_[static_cast<std::size_t>(graph_.task(t).ci)]); };
+    gates.poll = [this](std::span<const int> waiting, std::vector<int>& opened) {
+      std::vector<int> handles, arrived;
+      std::unordered_map<int, int> task_of;
+      for (int t : waiting) {
+        const int h = recv_handle_[static_cast<std::size_t>(graph_.task(t).ci)];
+        handles.push_back(h);
+        task_of[h] = t;
+      }
+      ranks_->test_recvs(handles, arrived);
+      for (int h : arrived) opened.push_back(task_of[h]);
+    };
   }
+  const auto t_graph = std::chrono::steady_clock::now();
   executor_.run(graph_, runner, records, &step_tasks_, gates.tasks.empty() ? nullptr : &gates);
+  graph_s_ += seconds_since(t_graph);
   records_stale_ = false;
   if (ranks_) finish_exchanges();
   collect_radiated();
@@ -547,28 +563,74 @@ std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().byt
 std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
 
 void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured) {
-  const auto g = space_.top_grid();
-  const domain::TopGrid grid{g[0], g[1], g[2]};
-  const auto ntop = static_cast<std::size_t>(grid.size());
-  std::vector<double> work(ntop, 0.0);
-  if (measured.empty()) {
-    // Nothing measured yet: every particle costs the same.
-    for (std::size_t t = 0; t < ntop; ++t)
-      work[t] = static_cast<double>(space_.cell(static_cast<int>(t)).count + space_.cell(static_cast<int>(t)).dm_count);
-  } else {
-    for (const auto& [x, cost] : measured) work[static_cast<std::size_t>(space_.top_cell_at(x))] += cost;
+  // Owners are chosen per leaf, not per top-level cell: every rank holds every particle, so
+  // the grain of the cut is free, and the top-level grid (which changes the results, bit by
+  // bit) need not depend on the rank count. Leaves are ordered along a Hilbert curve through
+  // their centres, so each rank's leaves form a compact region.
+  const std::vector<int>& leaves = space_.leaves();
+  const std::size_t nl = leaves.size();
+  constexpr int bits = 16;
+  const double cells_per_side = static_cast<double>(1u << bits);
+  std::vector<std::uint64_t> key(nl);
+  for (std::size_t l = 0; l < nl; ++l) {
+    const Vec3 x = space_.cell(leaves[l]).centre();
+    std::array<std::uint32_t, 3> q;
+    for (int k = 0; k < 3; ++k)
+      q[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(
+          std::clamp((x[k] - space_.box_lo()[k]) / space_.box_size()[k] * cells_per_side, 0.0, cells_per_side - 1.0));
+    key[l] = domain::hilbert_key(q[0], q[1], q[2], bits);
   }
-  // The owners stay while the grid is the same and they still share the work well enough.
-  const bool keep = top_owner_.size() == ntop &&
-                    !domain::needs_repartition(domain::imbalance(work, top_owner_, ranks_->size()),
-                                               config_.repartition_imbalance);
-  if (!keep) {
-    top_owner_ = domain::partition(domain::hilbert_order(grid), work, ranks_->size());
+  std::vector<int> curve(nl);
+  for (std::size_t l = 0; l < nl; ++l) curve[l] = static_cast<int>(l);
+  std::sort(curve.begin(), curve.end(), [&](int a, int b) {
+    return key[static_cast<std::size_t>(a)] != key[static_cast<std::size_t>(b)] ? key[static_cast<std::size_t>(a)] < key[static_cast<std::size_t>(b)] : a < b;
+  });
+  // Work per leaf: what was measured where the leaf now is, or its particle count at first.
+  std::vector<double> work(nl, 0.0);
+  std::vector<int> slot(space_.cells().size(), -1);
+  for (std::size_t l = 0; l < nl; ++l) slot[static_cast<std::size_t>(leaves[l])] = static_cast<int>(l);
+  if (measured.empty()) {
+    for (std::size_t l = 0; l < nl; ++l)
+      work[l] = static_cast<double>(space_.cell(leaves[l]).count + space_.cell(leaves[l]).dm_count);
+  } else {
+    for (const auto& [x, cost] : measured) {
+      int c = space_.cell_at(x);
+      while (!space_.cell(c).leaf) {  // an empty octant: the first leaf below stands in
+        int next = -1;
+        for (int ch : space_.cell(c).children)
+          if (ch >= 0 && next < 0) next = ch;
+        c = next;
+      }
+      work[static_cast<std::size_t>(slot[static_cast<std::size_t>(c)])] += cost;
+    }
+  }
+  // The cut points stay (as positions on the curve) while they still share the work well.
+  const int n = ranks_->size();
+  auto owners_from_cuts = [&] {
+    std::vector<int> own(nl);
+    for (std::size_t l = 0; l < nl; ++l)
+      own[l] = static_cast<int>(std::upper_bound(cut_keys_.begin(), cut_keys_.end(), key[l]) - cut_keys_.begin());
+    return own;
+  };
+  std::vector<int> leaf_owner;
+  if (cut_keys_.size() == static_cast<std::size_t>(n - 1)) {
+    leaf_owner = owners_from_cuts();
+    if (domain::needs_repartition(domain::imbalance(work, leaf_owner, n), config_.repartition_imbalance))
+      leaf_owner.clear();
+  }
+  if (leaf_owner.empty()) {
+    const std::vector<int> cut = domain::partition(curve, work, n);
+    // Rank r starts at the first leaf along the curve that the cut gives to r or beyond.
+    cut_keys_.assign(static_cast<std::size_t>(n - 1), std::numeric_limits<std::uint64_t>::max());
+    for (int l : curve)
+      for (int r = 1; r <= cut[static_cast<std::size_t>(l)]; ++r)
+        cut_keys_[static_cast<std::size_t>(r - 1)] = std::min(cut_keys_[static_cast<std::size_t>(r - 1)], key[static_cast<std::size_t>(l)]);
+    leaf_owner = owners_from_cuts();
     ++partitions_;
   }
+  last_imbalance_ = domain::imbalance(work, leaf_owner, n);
   owner_.assign(space_.cells().size(), 0);
-  for (std::size_t c = 0; c < owner_.size(); ++c)
-    owner_[c] = top_owner_[static_cast<std::size_t>(space_.top_cell_of(static_cast<int>(c)))];
+  for (std::size_t l = 0; l < nl; ++l) owner_[static_cast<std::size_t>(leaves[l])] = leaf_owner[l];
   leaf_cost_.assign(space_.cells().size(), 0.0);
 }
 
@@ -609,11 +671,11 @@ void Engine::sync_owned_cells(bool gas_cells_only) {
     const auto uc = static_cast<std::size_t>(c);
     return cell_active_[uc] && owner_[uc] == r && (!gas_cells_only || space_.cell(c).count > 0);
   };
-  domain::RankExchange::Buffer mine;
-  MessageWriter w(mine);
+  sync_buffer_.clear();  // keeps its capacity from step to step
+  MessageWriter w(sync_buffer_);
   for (int c : space_.leaves())
     if (sends(c, rank_)) pack_cell_state(w, space_, gas_, dm_, c);
-  const auto all = ranks_->allgather(mine);
+  const auto all = ranks_->allgather(sync_buffer_);
   for (int r = 0; r < ranks_->size(); ++r) {
     if (r == rank_) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
@@ -643,6 +705,7 @@ void Engine::sync_feedback_sites() {
 }
 
 void Engine::finish_exchanges() {
+  const auto t0 = std::chrono::steady_clock::now();
   ranks_->finish();
   add_measured_costs();
   // What each rank's tasks changed reaches every other rank; then the decisions every rank
@@ -651,6 +714,7 @@ void Engine::finish_exchanges() {
   if (config_.hydro.timestep_limiter) ranks_->min(gas_.wake_bin);
   ctx_->cover_exceeded = ranks_->any(ctx_->cover_exceeded.load());
   ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));
+  exchange_s_ += seconds_since(t0);
 }
 
 void Engine::add_measured_costs() {

@@ -117,9 +117,16 @@ class Engine {
   // Whether any rank says yes (the one rank's answer when alone): for decisions that every
   // rank must take together, such as writing a restart file.
   bool any_rank(bool yes) const;
-  // The rank owning each cell (all zero on one rank), and how often owners were chosen.
+  // The rank owning each leaf (empty on one rank), and how often the cut was chosen anew.
   const std::vector<int>& owners() const { return owner_; }
   int partitions() const { return partitions_; }
+  // max over ranks of the estimated work / mean - 1, when owners were last set.
+  double last_imbalance() const { return last_imbalance_; }
+  // Wall seconds since the start: in the task graph, in the exchanges after it (across
+  // ranks: waiting for the slowest rank, then the cells' state), in recutting the cells.
+  double graph_seconds() const { return graph_s_; }
+  double exchange_seconds() const { return exchange_s_; }
+  double rebuild_seconds() const { return rebuild_s_; }
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
@@ -185,7 +192,10 @@ class Engine {
   std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
   std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run
-  std::vector<int> top_owner_;              // per top-level cell
+  std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
+  double last_imbalance_ = 0.0;             // of the work estimate when owners were last set
+  double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
+  std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
 };
 

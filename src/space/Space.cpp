@@ -281,6 +281,24 @@ int Space::top_cell_at(const Vec3& x) const {
   return (ix[0] * ntop_[1] + ix[1]) * ntop_[2] + ix[2];
 }
 
+int Space::cell_at(const Vec3& x) const {
+  int c = top_cell_at(x);
+  for (;;) {
+    const Cell& cell = cells_[static_cast<std::size_t>(c)];
+    if (cell.leaf) return c;
+    int next = -1;
+    for (int ch : cell.children) {
+      if (ch < 0) continue;
+      const Cell& b = cells_[static_cast<std::size_t>(ch)];
+      bool inside = true;
+      for (int k = 0; k < 3; ++k) inside = inside && x[k] >= b.lo[k] && x[k] < b.lo[k] + b.width[k];
+      if (inside) next = ch;
+    }
+    if (next < 0) return c;
+    c = next;
+  }
+}
+
 void Space::collect_neighbours(int leaf, int node, std::vector<int>& out) const {
   const Cell& a = cells_[static_cast<std::size_t>(leaf)];
   const Cell& b = cells_[static_cast<std::size_t>(node)];

@@ -59,6 +59,8 @@ class Space {
   }
   // The top-level cell whose box holds position x (clamped to the grid).
   int top_cell_at(const Vec3& x) const;
+  // The smallest cell whose box holds x: a leaf, or an inner cell where x lies in an empty octant.
+  int cell_at(const Vec3& x) const;
 
   // Distance between the boxes of two cells (nearest periodic image).
   double box_distance(const Cell& a, const Cell& b) const;
