@@ -11,6 +11,8 @@
 #include <map>
 #include <random>
 #include <sstream>
+#include <span>
+#include <thread>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -499,4 +501,66 @@ TEST(Executor, OnlyListedTasksRunInDependencyOrder) {
       nullptr, &only);
   EXPECT_EQ(overlaps.load(), 0);  // a chain of dependencies: never two at once
   EXPECT_EQ(order, (std::vector<int>{0, 1, 3}));
+}
+
+// Gates (messages from other ranks): a gated task runs once its gate is named by the poll
+// and its predecessors are done, never earlier, with no more than `threads` tasks running at
+// once (the polling caller does not compute). Half the gates are opened by tasks of the
+// same graph (a rank's own sends, as when two ranks exchange), half from another thread.
+TEST(Executor, GatedTasksWaitForTheirGateAndNoThreadBlocks) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  for (int threads : {1, 2}) {
+    TaskGraph g;
+    constexpr int pairs = 40;
+    std::vector<int> opener(pairs), gated(pairs), after(pairs);
+    for (int k = 0; k < pairs; ++k) {
+      opener[static_cast<std::size_t>(k)] = g.add(ty, k);
+      gated[static_cast<std::size_t>(k)] = g.add(ty, k);
+      after[static_cast<std::size_t>(k)] = g.add(ty, k);
+      g.depends(gated[static_cast<std::size_t>(k)], after[static_cast<std::size_t>(k)]);
+    }
+    g.finalize();
+    std::vector<std::atomic<int>> open(pairs);
+    for (auto& o : open) o.store(0);
+    std::atomic<int> running{0}, most{0};
+    std::vector<std::atomic<int>> runs(static_cast<std::size_t>(g.size()));
+    for (auto& r : runs) r.store(0);
+    std::vector<std::atomic<int>> gate_seen_open(static_cast<std::size_t>(g.size()));
+    for (auto& r : gate_seen_open) r.store(0);
+
+    Executor::Gates gates;
+    gates.tasks = gated;
+    gates.poll = [&](std::span<const int> waiting, std::vector<int>& opened) {
+      for (int t : waiting)
+        if (open[static_cast<std::size_t>(g.task(t).ci)].load()) opened.push_back(t);
+    };
+    // The odd gates open from outside, a little later.
+    std::thread remote([&] {
+      for (int k = 1; k < pairs; k += 2) {
+        std::this_thread::sleep_for(std::chrono::microseconds(100));
+        open[static_cast<std::size_t>(k)].store(1);
+      }
+    });
+    Executor exec(threads);
+    exec.run(
+        g,
+        [&](const Task& t) {
+          const int now = running.fetch_add(1) + 1;
+          int m = most.load();
+          while (now > m && !most.compare_exchange_weak(m, now)) {
+          }
+          const int i = index_of(g, t);
+          runs[static_cast<std::size_t>(i)].fetch_add(1);
+          if (i == gated[static_cast<std::size_t>(t.ci)]) gate_seen_open[static_cast<std::size_t>(i)] = open[static_cast<std::size_t>(t.ci)].load();
+          if (i == opener[static_cast<std::size_t>(t.ci)] && t.ci % 2 == 0) open[static_cast<std::size_t>(t.ci)].store(1);
+          spin_for(std::chrono::microseconds(10));
+          running.fetch_sub(1);
+        },
+        nullptr, nullptr, &gates);
+    remote.join();
+    for (int i = 0; i < g.size(); ++i) EXPECT_EQ(runs[static_cast<std::size_t>(i)].load(), 1) << "task " << i;
+    for (int t : gated) EXPECT_EQ(gate_seen_open[static_cast<std::size_t>(t)].load(), 1) << "gated task " << t << " ran before its gate opened";
+    EXPECT_LE(most.load(), threads) << "more tasks ran at once than threads";
+  }
 }
