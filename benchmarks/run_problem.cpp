@@ -10,11 +10,15 @@
 
 #include "analysis/HydroReference.hpp"
 #include "engine/Engine.hpp"
+#include "RankFields.hpp"
+#include "tasks/MpiSession.hpp"
 #include "ics/TestProblems.hpp"
 
 using namespace fountain;
 
 int main(int argc, char** argv) {
+  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
+  tasks::MpiSession mpi(&argc, &argv);
   CLI::App app{"Fountain whole-run benchmark"};
   std::string problem, json_path;
   int threads = 1, resolution = 0, neighbours = 48, split = 256;
@@ -58,6 +62,9 @@ int main(int argc, char** argv) {
   const auto t0 = std::chrono::steady_clock::now();
   Engine e(c, std::move(ic.gas));
   e.initialise();
+  const bench::RankCounters counters = bench::RankCounters::of(e);
+  const long long steps_before = e.steps();
+  const auto t_steps = std::chrono::steady_clock::now();
   double full_step_s = 0, tasks_wall = 0, tasks_busy = 0, updates = 0;
   long long full_steps = 0;
   while (!e.finished()) {
@@ -71,6 +78,8 @@ int main(int argc, char** argv) {
     }
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double steps_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_steps).count();
+  const std::string ranks = bench::rank_fields(e, counters, e.steps() - steps_before, steps_wall, tasks_busy);
   e.drift_all();
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
@@ -92,10 +101,12 @@ int main(int argc, char** argv) {
       "{{\"problem\": \"{}\", \"particles\": {}, \"threads\": {}, \"neighbours\": {}, \"t_end\": {}, "
       "\"wall_s\": {:.3f}, \"steps\": {}, \"full_steps\": {}, \"full_step_us_per_particle\": {:.4f}, "
       "\"updates_per_s\": {:.4g}, \"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, "
-      "{}}}\n",
+      "{}, {}}}\n",
       problem, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
-      tasks_wall > 0 ? tasks_busy / (tasks_wall * e.threads()) : 0.0, peak_bytes / static_cast<double>(n), accuracy);
-  fmt::print("{}", json);
-  if (!json_path.empty()) std::ofstream(json_path) << json;
+      tasks_wall > 0 ? tasks_busy / (tasks_wall * e.threads()) : 0.0, peak_bytes / static_cast<double>(n), accuracy, ranks);
+  if (mpi.rank() == 0) {
+    fmt::print("{}", json);
+    if (!json_path.empty()) std::ofstream(json_path) << json;
+  }
   return 0;
 }

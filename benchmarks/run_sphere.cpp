@@ -13,11 +13,15 @@
 #include <map>
 
 #include "engine/Engine.hpp"
+#include "RankFields.hpp"
+#include "tasks/MpiSession.hpp"
 #include "ics/RotatingSphere.hpp"
 
 using namespace fountain;
 
 int main(int argc, char** argv) {
+  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
+  tasks::MpiSession mpi(&argc, &argv);
   CLI::App app{"Fountain rotating-sphere benchmark"};
   int threads = 1, per_species = 8000;
   double t_end = 5.0e-5, softening = 0.001;
@@ -67,6 +71,7 @@ int main(int argc, char** argv) {
   const long long steps_before = e.steps();
   const double time_before = e.time();
   const double stars_before = e.star_formation_total().mass_formed;
+  const bench::RankCounters counters = bench::RankCounters::of(e);
   const auto t1 = std::chrono::steady_clock::now();
   while (!e.finished()) {
     const StepInfo s = e.step();
@@ -93,13 +98,16 @@ int main(int argc, char** argv) {
       "\"measured_from\": {}, \"t_end\": {}, \"mass_formed_measured\": {:.4g}, \"promotions\": {}, "
       "\"setup_s\": {:.3f}, \"wall_s\": {:.3f}, \"steps\": {}, "
       "\"updates_per_s\": {:.4g}, \"task_seconds_by_category\": {{{}\"outside_tasks\": {:.4f}}}, "
-      "\"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}}}\n",
+      "\"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, {}}}\n",
       per_species, n, e.threads(), msph, cooling, star_formation, eps_cold, eps_hot, time_before, t_end,
       e.star_formation_total().mass_formed - stars_before, e.star_formation_total().promotions, setup, wall,
       e.steps() - steps_before, updates / wall, categories,
       thread_time - tasks_busy, tasks_wall > 0 ? tasks_busy / thread_time : 0.0,
-      static_cast<double>(ru.ru_maxrss) * 1024.0 / static_cast<double>(n));
-  fmt::print("{}", json);
-  if (!json_path.empty()) std::ofstream(json_path) << json;
+      static_cast<double>(ru.ru_maxrss) * 1024.0 / static_cast<double>(n),
+      bench::rank_fields(e, counters, e.steps() - steps_before, wall, tasks_busy));
+  if (mpi.rank() == 0) {
+    fmt::print("{}", json);
+    if (!json_path.empty()) std::ofstream(json_path) << json;
+  }
   return 0;
 }

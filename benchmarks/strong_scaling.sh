@@ -1,0 +1,26 @@
+#!/bin/sh
+# Strong scaling across ranks and threads: the same problem at every ranks x threads layout
+# the machine offers (1x1, 1x2, 2x1 on two cores), one JSON file per run in
+# benchmarks/results/scaling_<problem>_<ranks>x<threads>.json, then the table
+# (python3 benchmarks/scaling_report.py). Problems: the 250k-particle Sedov blast (the
+# engine benchmark's, run to SEDOV_T_END) and the 8000-per-species rotating sphere with star
+# formation and MFB feedback on (to SPHERE_T_END).
+set -eu
+root=$(cd "$(dirname "$0")/.." && pwd)
+out="$root/benchmarks/results"
+mkdir -p "$out"
+mpirun_n() { mpirun --allow-run-as-root --oversubscribe --bind-to none -np "$@"; }
+layouts=${LAYOUTS:-"1x1 1x2 2x1"}
+for layout in $layouts; do
+  ranks=${layout%x*} threads=${layout#*x}
+  if echo "${PROBLEMS:-sedov sphere}" | grep -q sedov; then
+    mpirun_n "$ranks" "$root/build/benchmarks/fountain_run_bench" sedov --threads "$threads" \
+      --t-end "${SEDOV_T_END:-0.01}" --json "$out/scaling_sedov_$layout.json" > /dev/null
+  fi
+  if echo "${PROBLEMS:-sedov sphere}" | grep -q sphere; then
+    mpirun_n "$ranks" "$root/build/benchmarks/fountain_sphere_bench" -n 8000 --threads "$threads" \
+      --star-formation --eps-cold 0.4 --eps-hot 0.4 --t-end "${SPHERE_T_END:-2e-5}" \
+      --json "$out/scaling_sphere_$layout.json" > /dev/null
+  fi
+done
+"${PYTHON:-/usr/bin/python3}" "$root/benchmarks/scaling_report.py" "$out"
