@@ -175,6 +175,7 @@ void RankExchange::post_send(int dest, int tag, Buffer data) {
   p.data = std::move(data);
   check(MPI_Isend(p.data.data(), as_count(p.data.size()), MPI_BYTE, dest, tag, impl_->comm, &p.request), "Isend");
   traffic_.bytes += p.data.size();
+  traffic_.point_to_point_bytes += p.data.size();
   ++traffic_.messages;
 }
 

@@ -51,6 +51,7 @@ class RankExchange {
   // Counted since the last reset: point-to-point and collective payload, sent by this rank.
   struct Traffic {
     std::uint64_t bytes = 0, messages = 0;
+    std::uint64_t point_to_point_bytes = 0;  // of which by post_send (the rest by collectives)
   };
   Traffic traffic() const;
   void reset_traffic();

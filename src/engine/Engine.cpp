@@ -561,6 +561,7 @@ int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
 bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }
 std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
 std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
+std::uint64_t Engine::ghost_bytes_sent() const { return ranks_ ? ranks_->traffic().point_to_point_bytes : 0; }
 
 void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured) {
   // Owners are chosen per leaf, not per top-level cell: every rank holds every particle, so

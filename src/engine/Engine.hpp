@@ -130,6 +130,7 @@ class Engine {
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
+  std::uint64_t ghost_bytes_sent() const;  // of bytes_sent(): the ghost results, cell to cell
 
  private:
   enum class Phase { Density, Hydro, Full };
