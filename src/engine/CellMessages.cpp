@@ -27,6 +27,32 @@ struct UnpackSlice {
   }
 };
 
+// The same for the flagged particles of a slice only.
+struct PackFlagged {
+  MessageWriter& w;
+  std::size_t first, count;
+  std::span<const char> flag;
+  const void* skip = nullptr;
+  template <class T>
+  void operator()(std::vector<T>& f) const {
+    if (static_cast<const void*>(&f) == skip) return;
+    for (std::size_t i = first; i < first + count; ++i)
+      if (flag[i]) w.put(f[i]);
+  }
+};
+struct UnpackFlagged {
+  MessageReader& r;
+  std::size_t first, count;
+  std::span<const char> flag;
+  const void* skip = nullptr;
+  template <class T>
+  void operator()(std::vector<T>& f) const {
+    if (static_cast<const void*>(&f) == skip) return;
+    for (std::size_t i = first; i < first + count; ++i)
+      if (flag[i]) r.get(&f[i], 1);
+  }
+};
+
 template <class F>
 void ghost_fields(GasParticles& g, F&& f) {
   f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
@@ -34,22 +60,24 @@ void ghost_fields(GasParticles& g, F&& f) {
 }
 }  // namespace
 
-void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c) {
+void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
+                     std::span<const char> gas_moved, std::span<const char> dm_moved) {
   const Cell& cell = space.cell(c);
   w.put(cell);
-  gas.for_each_field(PackSlice{w, cell.first, cell.count, &gas.wake_bin});
-  dm.for_each_field(PackSlice{w, cell.dm_first, cell.dm_count});
+  gas.for_each_field(PackFlagged{w, cell.first, cell.count, gas_moved, &gas.wake_bin});
+  dm.for_each_field(PackFlagged{w, cell.dm_first, cell.dm_count, dm_moved});
 }
 
-void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c) {
+void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
+                       std::span<const char> gas_moved, std::span<const char> dm_moved) {
   Cell& cell = space.cell(c);
   const Cell sent = r.get<Cell>();
   if (sent.first != cell.first || sent.count != cell.count || sent.dm_first != cell.dm_first ||
       sent.dm_count != cell.dm_count)
     throw std::logic_error("ranks disagree on a cell's particles");
   cell = sent;
-  gas.for_each_field(UnpackSlice{r, cell.first, cell.count, &gas.wake_bin});
-  dm.for_each_field(UnpackSlice{r, cell.dm_first, cell.dm_count});
+  gas.for_each_field(UnpackFlagged{r, cell.first, cell.count, gas_moved, &gas.wake_bin});
+  dm.for_each_field(UnpackFlagged{r, cell.dm_first, cell.dm_count, dm_moved});
 }
 
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c) {

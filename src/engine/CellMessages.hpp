@@ -60,8 +60,13 @@ class MessageReader {
 // Everything about leaf c: the cell's own record and every field of its gas and collisionless
 // particles, except the gas's wake requests (which any rank may make of any particle, and
 // which the engine combines across ranks separately).
-void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c);
-void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c);
+// Only the particles flagged in `gas_moved` / `dm_moved` (indexed by particle) are carried:
+// those active in the step, the only ones a cell's own tasks change (the sender and the
+// receiver flag the same ones, from the bins at the start of the step).
+void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
+                     std::span<const char> gas_moved, std::span<const char> dm_moved);
+void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
+                       std::span<const char> gas_moved, std::span<const char> dm_moved);
 
 // What leaf c's ghost computed, which other cells' force loops read.
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c);

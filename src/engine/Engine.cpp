@@ -265,13 +265,25 @@ std::size_t Engine::activate(Phase phase) {
     needs_drift[c] = 1;
     for (int n : space_.neighbours(c)) needs_drift[n] = 1;
   }
+  // Across ranks, the particles active now are the ones whose state the owner's tasks change
+  // (flagged before any bin changes, so every rank flags the same).
+  if (ranks_) {
+    gas_moved_.assign(gas_.size(), 0);
+    dm_moved_.assign(dm_.size(), 0);
+  }
   for (int c : leaves)
     if (cell_active_[c]) {
       const Cell& cell = space_.cell(c);
-      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
-        active_particles += ctx_->is_active(i) ? 1 : 0;
-      for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
-        active_particles += ctx_->is_active_dm(i) ? 1 : 0;
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+        const bool a = ctx_->is_active(i);
+        active_particles += a ? 1 : 0;
+        if (ranks_) gas_moved_[i] = a;
+      }
+      for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
+        const bool a = ctx_->is_active_dm(i);
+        active_particles += a ? 1 : 0;
+        if (ranks_) dm_moved_[i] = a;
+      }
     }
   // Only the tasks of active cells (and the drifts of their neighbours) are listed for the
   // executor; every ordering between them is a direct dependency or runs through a listed
@@ -675,13 +687,13 @@ void Engine::sync_owned_cells(bool gas_cells_only) {
   sync_buffer_.clear();  // keeps its capacity from step to step
   MessageWriter w(sync_buffer_);
   for (int c : space_.leaves())
-    if (sends(c, rank_)) pack_cell_state(w, space_, gas_, dm_, c);
+    if (sends(c, rank_)) pack_cell_state(w, space_, gas_, dm_, c, gas_moved_, dm_moved_);
   const auto all = ranks_->allgather(sync_buffer_);
   for (int r = 0; r < ranks_->size(); ++r) {
     if (r == rank_) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
     for (int c : space_.leaves())
-      if (sends(c, r)) unpack_cell_state(in, space_, gas_, dm_, c);
+      if (sends(c, r)) unpack_cell_state(in, space_, gas_, dm_, c, gas_moved_, dm_moved_);
     if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more cell state than expected", r));
   }
 }

@@ -196,6 +196,7 @@ class Engine {
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
   double last_imbalance_ = 0.0;             // of the work estimate when owners were last set
   double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
+  std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
 };
