@@ -161,9 +161,14 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         if (keep >= 0) ready.push_back(keep);
       }
       busy.fetch_add(my_busy, std::memory_order_relaxed);
-      if (done.fetch_add(my_done, std::memory_order_acq_rel) + my_done == n_part || failed.load()) {
-        settled.fetch_add(1, std::memory_order_release);
-        settled.notify_all();
+      // Adding to `done` is this job's last touch of the closure (the caller may destroy it
+      // once every job has added): what the wake-up needs is copied out first.
+      std::atomic<int>& wake = settled;
+      const int total = n_part;
+      const bool failure = failed.load();
+      if (done.fetch_add(my_done, std::memory_order_acq_rel) + my_done == total || failure) {
+        wake.fetch_add(1, std::memory_order_release);
+        wake.notify_all();
       }
     };
     // Roots are collected before any runs: once tasks run, counters of others reach zero.

@@ -73,11 +73,6 @@ long long RankExchange::sum(long long local) const {
   return out;
 }
 
-void RankExchange::sum(std::span<double> values) const {
-  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), as_count(values.size()), MPI_DOUBLE, MPI_SUM, impl_->comm),
-        "Allreduce(sum)");
-}
-
 void RankExchange::min(std::span<std::int8_t> values) const {
   check(MPI_Allreduce(MPI_IN_PLACE, values.data(), as_count(values.size()), MPI_INT8_T, MPI_MIN, impl_->comm),
         "Allreduce(min)");
@@ -111,27 +106,11 @@ std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>
   return out;
 }
 
-void RankExchange::broadcast(Buffer& data) const {
-  long long n = static_cast<long long>(data.size());
-  check(MPI_Bcast(&n, 1, MPI_LONG_LONG, 0, impl_->comm), "Bcast(size)");
-  data.resize(static_cast<std::size_t>(n));
-  check(MPI_Bcast(data.data(), as_count(data.size()), MPI_BYTE, 0, impl_->comm), "Bcast");
-}
-
 int RankExchange::post_recv(int source, int tag, std::size_t bytes) {
   auto& p = impl_->recvs.emplace_back();
   p.data.resize(bytes);
   check(MPI_Irecv(p.data.data(), as_count(bytes), MPI_BYTE, source, tag, impl_->comm, &p.request), "Irecv");
   return static_cast<int>(impl_->recvs.size()) - 1;
-}
-
-bool RankExchange::test_recv(int handle) {
-  auto& p = impl_->recvs[static_cast<std::size_t>(handle)];
-  if (p.done) return true;
-  int flag = 0;
-  check(MPI_Test(&p.request, &flag, MPI_STATUS_IGNORE), "Test");
-  p.done = flag != 0;
-  return p.done;
 }
 
 void RankExchange::test_recvs(std::span<const int> handles, std::vector<int>& arrived) {
@@ -195,12 +174,9 @@ namespace {
 }  // namespace
 bool RankExchange::any(bool) const { no_mpi(); }
 long long RankExchange::sum(long long) const { no_mpi(); }
-void RankExchange::sum(std::span<double>) const { no_mpi(); }
 void RankExchange::min(std::span<std::int8_t>) const { no_mpi(); }
 std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>) const { no_mpi(); }
-void RankExchange::broadcast(Buffer&) const { no_mpi(); }
 int RankExchange::post_recv(int, int, std::size_t) { no_mpi(); }
-bool RankExchange::test_recv(int) { no_mpi(); }
 void RankExchange::test_recvs(std::span<const int>, std::vector<int>&) { no_mpi(); }
 const RankExchange::Buffer& RankExchange::wait_recv(int) { no_mpi(); }
 void RankExchange::post_send(int, int, Buffer) { no_mpi(); }

@@ -29,18 +29,14 @@ class RankExchange {
 
   bool any(bool local) const;
   long long sum(long long local) const;
-  void sum(std::span<double> values) const;        // element by element, in place
   void min(std::span<std::int8_t> values) const;   // element by element, in place
   // Every rank's buffer, indexed by rank (this rank's own included): views into storage
   // kept and reused by the exchange, valid until its next allgather.
   std::vector<std::span<const char>> allgather(std::span<const char> mine) const;
-  // Rank 0's buffer, on every rank.
-  void broadcast(Buffer& data) const;
 
   // Point to point: receives are posted before the tasks that need them run (their handle
   // is an index), sends are posted by tasks and completed together once the graph is done.
   int post_recv(int source, int tag, std::size_t bytes);
-  bool test_recv(int handle);            // non-blocking: has it arrived?
   // Non-blocking, one test for many: appends to `arrived` the handles among `handles` whose
   // message is in.
   void test_recvs(std::span<const int> handles, std::vector<int>& arrived);

@@ -300,7 +300,7 @@ std::size_t Engine::activate(Phase phase) {
       step_tasks_.push_back(t);
     }
   const bool exchange = ranks_ && phase != Phase::Density;
-  if (exchange) plan_ghost_exchange(phase);
+  if (exchange) plan_ghost_exchange();
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
     if (phase == Phase::Hydro)
@@ -647,7 +647,7 @@ void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured)
   leaf_cost_.assign(space_.cells().size(), 0.0);
 }
 
-void Engine::plan_ghost_exchange(Phase) {
+void Engine::plan_ghost_exchange() {
   const std::size_t ncells = space_.cells().size();
   send_to_.assign(ncells, {});
   need_recv_.assign(ncells, 0);

@@ -147,7 +147,7 @@ class Engine {
   void guess_smoothing_lengths();
   bool mine(int c) const { return owner_.empty() || owner_[static_cast<std::size_t>(c)] == rank_; }
   void assign_owners(const std::vector<std::pair<Vec3, double>>& measured);
-  void plan_ghost_exchange(Phase phase);
+  void plan_ghost_exchange();
   void post_receives();
   void sync_owned_cells(bool gas_cells_only);  // every rank's active cells to every other rank
   void sync_feedback_sites();
