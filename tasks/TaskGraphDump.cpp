@@ -184,7 +184,7 @@ void write_dot(const TaskGraph& graph, const TaskTypeRegistry& types, const std:
 
 void write_timeline_csv(const TaskGraph& graph, const TaskTypeRegistry& types,
                         const std::vector<TaskRecord>& records, int rank, long long step,
-                        const std::string& path) {
+                        const std::string& path, const std::vector<TimelineInterval>& extra) {
   if (records.size() != static_cast<std::size_t>(graph.size()))
     throw std::invalid_argument(fmt::format("write_timeline_csv: {} records for a graph of {} tasks",
                                             records.size(), graph.size()));
@@ -201,6 +201,9 @@ void write_timeline_csv(const TaskGraph& graph, const TaskTypeRegistry& types,
     fmt::format_to(out, "{},{},{},{},{},{},{},{},{}\n", csv_field(info.name), csv_field(info.subtype),
                    csv_field(info.category), t.ci, t.cj, rank, r.thread, r.start_ns, r.end_ns);
   }
+  for (const TimelineInterval& x : extra)
+    fmt::format_to(out, "{},{},{},-1,-1,{},-1,{},{}\n", csv_field(x.type), csv_field(x.subtype), csv_field(x.category),
+                   rank, x.start_ns, x.end_ns);
   write_file(path, buf);
 }
 

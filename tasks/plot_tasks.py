@@ -12,6 +12,10 @@ the columns type,subtype,category,ci,cj,rank,thread,start_ns,end_ns (ns since th
 The chart has one row per (rank, thread) and one bar per task, coloured by task type
 (type_subtype). On stdout it prints the time spent per task type and, per (rank, thread), the
 busy time and the idle fraction 1 - busy / (latest end - earliest start over all files).
+Runs across MPI ranks add, per rank, a row of thread -1: the exchanges after the task graph
+(waiting for the other ranks, then every rank's changed cells), shown as the rank's
+"exchanges" lane, with the share of the span it took; a worker's idle time includes its
+waits for messages inside the graph (the recv tasks run once their message is in).
 
 Needs only numpy and matplotlib (Agg backend).
 """
@@ -77,6 +81,10 @@ def summarise(names, rank, thread, start, end):
     for r, th in sorted(set(zip(rank.tolist(), thread.tolist()))):
         sel = (rank == r) & (thread == th)
         busy = dur[sel].sum()
+        if th < 0:  # the exchanges after the graph: time spent communicating, not idle
+            share = busy / span if span > 0 else 0.0
+            print("%6d %6s %12.3f %7.1f%% of the span in exchanges with other ranks" % (r, "-", busy * 1e-6, 100.0 * share))
+            continue
         idle = 1.0 - busy / span if span > 0 else 0.0
         print("%6d %6d %12.3f %7.1f%% %8d" % (r, th, busy * 1e-6, 100.0 * idle, int(sel.sum())))
 
@@ -119,7 +127,7 @@ def plot_gantt(names, rank, thread, start, end, output, title):
         ax.barh(y[sel], width[sel], left=left[sel], height=0.8, color=colours[ty],
                 edgecolor="none", align="center")
     ax.set_yticks(range(len(lanes)))
-    ax.set_yticklabels(["rank %d thread %d" % lane for lane in lanes])
+    ax.set_yticklabels(["rank %d exchanges" % lane[0] if lane[1] < 0 else "rank %d thread %d" % lane for lane in lanes])
     ax.set_ylim(-0.6, len(lanes) - 0.4)
     ax.invert_yaxis()
     ax.set_xlim(0, max(float((end.max() - t0) * 1e-6), 1e-6))

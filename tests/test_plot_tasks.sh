@@ -31,6 +31,7 @@ cat > "$tmp/timeline_rank1.csv" <<'EOF'
 type,subtype,category,ci,cj,rank,thread,start_ns,end_ns
 density,self,hydro,2,-1,1,0,100000,500000
 drift,,integration,2,-1,1,0,500000,600000
+exchange,after_graph,mpi,-1,-1,1,-1,600000,900000
 EOF
 
 # Gantt chart plus summary.
@@ -46,6 +47,8 @@ done
 grep -Eq '^density_self +1\.100 +[0-9.]+% +3$' "$tmp/out.txt" || fail "wrong density_self line"
 # rank 0 thread 1 is busy 0.4 ms of the 1.2 ms span: 66.7% idle.
 grep -Eq '^ +0 +1 +0\.400 +66\.7% +2$' "$tmp/out.txt" || fail "wrong idle fraction for rank 0 thread 1"
+# rank 1's exchanges after its graph (thread -1): 0.3 ms of the 1.2 ms span.
+grep -Eq '^ +1 +- +0\.300 +25\.0% of the span in exchanges' "$tmp/out.txt" || fail "wrong exchange line for rank 1"
 
 # --summary-only: the same summary, no picture.
 "$python" "$tool" "$tmp/timeline_rank0.csv" --summary-only -o "$tmp/none.png" > "$tmp/out2.txt" 2>&1 ||

@@ -150,6 +150,12 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   info.temperature = temperature;
   info.star_formation = config.star_formation.enabled;
 
+  // Across ranks, the exchanges after the graph join the timeline as a row of its own.
+  auto exchange_interval = [&]() -> std::vector<tasks::TimelineInterval> {
+    if (engine.ranks() == 1) return {};
+    const auto [start, end] = engine.last_exchange_ns();
+    return {{"exchange", "after_graph", "mpi", start, end}};
+  };
   RunSummary summary;
   auto write = [&] {
     engine.drift_all();
@@ -232,7 +238,8 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     if (dump_timeline && s.active > 0 && s.step % config.output.dump_timeline_every == 0)
       tasks::write_timeline_csv(engine.records_graph(), engine.task_types().registry, engine.last_records(),
                                 engine.rank(), s.step,
-                                fmt::format("{}/timeline_step{:06d}{}.csv", config.output.directory, s.step, rank_suffix));
+                                fmt::format("{}/timeline_step{:06d}{}.csv", config.output.directory, s.step, rank_suffix),
+                                exchange_interval());
     if (statistics && (engine.steps() % config.output.statistics_every == 0 || engine.finished())) write_statistics();
     if (engine.ti_current() == ti_out && !engine.finished()) {
       write();

@@ -411,7 +411,14 @@ void Engine::run_graph(StepInfo* info) {
   executor_.run(graph_, runner, records, &step_tasks_, gates.tasks.empty() ? nullptr : &gates);
   graph_s_ += seconds_since(t_graph);
   records_stale_ = false;
-  if (ranks_) finish_exchanges();
+  if (ranks_) {
+    const auto ns_since_graph = [&] {
+      return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t_graph).count();
+    };
+    last_exchange_ns_.first = ns_since_graph();
+    finish_exchanges();
+    last_exchange_ns_.second = ns_since_graph();
+  }
   collect_radiated();
   if (info) {
     info->tasks_wall_s += 1e-9 * static_cast<double>(executor_.last_wall_ns());

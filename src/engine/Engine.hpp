@@ -125,6 +125,8 @@ class Engine {
   // Wall seconds since the start: in the task graph, in the exchanges after it (across
   // ranks: waiting for the slowest rank, then the cells' state), in recutting the cells.
   double graph_seconds() const { return graph_s_; }
+  // The exchanges after the last graph, in ns since it began ({0, 0} when running alone).
+  std::pair<std::int64_t, std::int64_t> last_exchange_ns() const { return last_exchange_ns_; }
   double exchange_seconds() const { return exchange_s_; }
   double rebuild_seconds() const { return rebuild_s_; }
   // Bytes and messages this rank sent since the start of the run.
@@ -196,6 +198,7 @@ class Engine {
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
   double last_imbalance_ = 0.0;             // of the work estimate when owners were last set
   double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
+  std::pair<std::int64_t, std::int64_t> last_exchange_ns_{0, 0};
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
