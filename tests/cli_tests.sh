@@ -162,20 +162,21 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     extra="restart:
   every_steps: 4"
     "$bin" ic sod -n 24 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Sod ICs"
-    T_END=0.05 params ic.hdf5 outA "$extra"; cp params.yml paramsA.yml
-    T_END=0.05 params ic.hdf5 outB "$extra"; cp params.yml paramsB.yml
-    "$bin" run paramsA.yml -q > /dev/null 2>&1 || fail "uninterrupted run"
-    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run paramsB.yml > runB.txt 2>&1 &
+    T_END=0.05 params ic.hdf5 outA "$extra"; cp params.yml params_mpi_whole.yml
+    T_END=0.05 params ic.hdf5 outB "$extra"; cp params.yml params_mpi_killed.yml
+    "$bin" run params_mpi_whole.yml -q > /dev/null 2>&1 || fail "uninterrupted run"
+    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml > runB.txt 2>&1 &
     pid=$!
     n=0
     while [ ! -f outB/restart.hdf5 ] && kill -0 "$pid" 2>/dev/null && [ $n -lt 600 ]; do sleep 0.05; n=$((n + 1)); done
     sleep 0.2
-    pkill -9 -f "run paramsB.yml" 2>/dev/null || true
+    # The name is this test's own: ctest may run the 1-rank restart test beside it.
+    pkill -9 -f "run params_mpi_killed.yml" 2>/dev/null || true
     wait "$pid" 2>/dev/null || true
     [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
     [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was killed"
     echo "killed after: $(grep -c '^step' runB.txt) steps"
-    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run paramsB.yml --restart \
+    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml --restart \
       > restart.txt 2>&1 || { cat restart.txt; fail "restart on 2 ranks failed"; }
     head -1 restart.txt
     "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
