@@ -36,8 +36,14 @@ struct PackFlagged {
   template <class T>
   void operator()(std::vector<T>& f) const {
     if (static_cast<const void*>(&f) == skip) return;
+    std::size_t n = 0;
+    for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
+    char* out = w.grow(n * sizeof(T));
     for (std::size_t i = first; i < first + count; ++i)
-      if (flag[i]) w.put(f[i]);
+      if (flag[i]) {
+        std::memcpy(out, &f[i], sizeof(T));
+        out += sizeof(T);
+      }
   }
 };
 struct UnpackFlagged {
@@ -48,8 +54,14 @@ struct UnpackFlagged {
   template <class T>
   void operator()(std::vector<T>& f) const {
     if (static_cast<const void*>(&f) == skip) return;
+    std::size_t n = 0;
+    for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
+    const char* in = r.take(n * sizeof(T));
     for (std::size_t i = first; i < first + count; ++i)
-      if (flag[i]) r.get(&f[i], 1);
+      if (flag[i]) {
+        std::memcpy(&f[i], in, sizeof(T));
+        in += sizeof(T);
+      }
   }
 };
 

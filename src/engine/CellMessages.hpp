@@ -27,6 +27,12 @@ class MessageWriter {
   }
   template <class T>
   void put(const T& value) { put(&value, 1); }
+  // Room for `bytes` more, to be filled by the caller.
+  char* grow(std::size_t bytes) {
+    const std::size_t at = out_.size();
+    out_.resize(at + bytes);
+    return out_.data() + at;
+  }
 
  private:
   std::vector<char>& out_;
@@ -49,6 +55,13 @@ class MessageReader {
     T v;
     get(&v, 1);
     return v;
+  }
+  // The next `bytes`, to be read by the caller.
+  const char* take(std::size_t bytes) {
+    if (at_ + bytes > in_.size()) throw std::logic_error("message shorter than its reader expects");
+    const char* p = in_.data() + at_;
+    at_ += bytes;
+    return p;
   }
   bool done() const { return at_ == in_.size(); }
 
