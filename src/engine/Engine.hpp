@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "cooling/RadiativeCooling.hpp"
@@ -151,6 +152,7 @@ class Engine {
   void assign_owners(const std::vector<std::pair<Vec3, double>>& measured);
   void plan_ghost_exchange();
   void post_receives();
+  void poll_receives(std::span<const int> waiting, std::vector<int>& opened);  // the recv gates
   void sync_owned_cells(bool gas_cells_only);  // every rank's active cells to every other rank
   void sync_feedback_sites();
   void finish_exchanges();

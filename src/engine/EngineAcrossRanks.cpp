@@ -1,0 +1,210 @@
+// The engine's work across MPI ranks: who owns which leaf, and what the ranks send each other (docs/design.md, "MPI").
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstring>
+#include <limits>
+#include <unordered_map>
+
+#include "domain/DomainDecomposition.hpp"
+#include "domain/RankExchange.hpp"
+#include "engine/CellMessages.hpp"
+#include "engine/Engine.hpp"
+#include "starformation/StarFormationLoop.hpp"
+
+namespace fountain {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+}  // namespace
+
+void Engine::poll_receives(std::span<const int> waiting, std::vector<int>& opened) {
+  std::vector<int> handles, arrived;
+  std::unordered_map<int, int> task_of;
+  for (int t : waiting) {
+    const int h = recv_handle_[static_cast<std::size_t>(graph_.task(t).ci)];
+    handles.push_back(h);
+    task_of[h] = t;
+  }
+  ranks_->test_recvs(handles, arrived);
+  for (int h : arrived) opened.push_back(task_of[h]);
+}
+
+int Engine::rank() const { return rank_; }
+int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
+bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }
+std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
+std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
+std::uint64_t Engine::ghost_bytes_sent() const { return ranks_ ? ranks_->traffic().point_to_point_bytes : 0; }
+
+void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured) {
+  // Owners are chosen per leaf, not per top-level cell: every rank holds every particle, so
+  // the grain of the cut is free, and the top-level grid (which changes the results, bit by
+  // bit) need not depend on the rank count. Leaves are ordered along a Hilbert curve through
+  // their centres, so each rank's leaves form a compact region.
+  const std::vector<int>& leaves = space_.leaves();
+  const std::size_t nl = leaves.size();
+  constexpr int bits = 16;
+  const double cells_per_side = static_cast<double>(1u << bits);
+  std::vector<std::uint64_t> key(nl);
+  for (std::size_t l = 0; l < nl; ++l) {
+    const Vec3 x = space_.cell(leaves[l]).centre();
+    std::array<std::uint32_t, 3> q;
+    for (int k = 0; k < 3; ++k)
+      q[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(
+          std::clamp((x[k] - space_.box_lo()[k]) / space_.box_size()[k] * cells_per_side, 0.0, cells_per_side - 1.0));
+    key[l] = domain::hilbert_key(q[0], q[1], q[2], bits);
+  }
+  std::vector<int> curve(nl);
+  for (std::size_t l = 0; l < nl; ++l) curve[l] = static_cast<int>(l);
+  std::sort(curve.begin(), curve.end(), [&](int a, int b) {
+    return key[static_cast<std::size_t>(a)] != key[static_cast<std::size_t>(b)] ? key[static_cast<std::size_t>(a)] < key[static_cast<std::size_t>(b)] : a < b;
+  });
+  // Work per leaf: what was measured where the leaf now is, or its particle count at first.
+  std::vector<double> work(nl, 0.0);
+  std::vector<int> slot(space_.cells().size(), -1);
+  for (std::size_t l = 0; l < nl; ++l) slot[static_cast<std::size_t>(leaves[l])] = static_cast<int>(l);
+  if (measured.empty()) {
+    for (std::size_t l = 0; l < nl; ++l)
+      work[l] = static_cast<double>(space_.cell(leaves[l]).count + space_.cell(leaves[l]).dm_count);
+  } else {
+    for (const auto& [x, cost] : measured) {
+      int c = space_.cell_at(x);
+      while (!space_.cell(c).leaf) {  // an empty octant: the first leaf below stands in
+        int next = -1;
+        for (int ch : space_.cell(c).children)
+          if (ch >= 0 && next < 0) next = ch;
+        c = next;
+      }
+      work[static_cast<std::size_t>(slot[static_cast<std::size_t>(c)])] += cost;
+    }
+  }
+  // The cut points stay (as positions on the curve) while they still share the work well.
+  const int n = ranks_->size();
+  auto owners_from_cuts = [&] {
+    std::vector<int> own(nl);
+    for (std::size_t l = 0; l < nl; ++l)
+      own[l] = static_cast<int>(std::upper_bound(cut_keys_.begin(), cut_keys_.end(), key[l]) - cut_keys_.begin());
+    return own;
+  };
+  std::vector<int> leaf_owner;
+  if (cut_keys_.size() == static_cast<std::size_t>(n - 1)) {
+    leaf_owner = owners_from_cuts();
+    if (domain::needs_repartition(domain::imbalance(work, leaf_owner, n), config_.repartition_imbalance))
+      leaf_owner.clear();
+  }
+  if (leaf_owner.empty()) {
+    const std::vector<int> cut = domain::partition(curve, work, n);
+    // Rank r starts at the first leaf along the curve that the cut gives to r or beyond.
+    cut_keys_.assign(static_cast<std::size_t>(n - 1), std::numeric_limits<std::uint64_t>::max());
+    for (int l : curve)
+      for (int r = 1; r <= cut[static_cast<std::size_t>(l)]; ++r)
+        cut_keys_[static_cast<std::size_t>(r - 1)] = std::min(cut_keys_[static_cast<std::size_t>(r - 1)], key[static_cast<std::size_t>(l)]);
+    leaf_owner = owners_from_cuts();
+    ++partitions_;
+  }
+  last_imbalance_ = domain::imbalance(work, leaf_owner, n);
+  owner_.assign(space_.cells().size(), 0);
+  for (std::size_t l = 0; l < nl; ++l) owner_[static_cast<std::size_t>(leaves[l])] = leaf_owner[l];
+  leaf_cost_.assign(space_.cells().size(), 0.0);
+}
+
+void Engine::plan_ghost_exchange() {
+  const std::size_t ncells = space_.cells().size();
+  send_to_.assign(ncells, {});
+  need_recv_.assign(ncells, 0);
+  // Every rank sees every cell's owner, activity and neighbours, so sender and receiver
+  // agree on each message without asking each other.
+  for (int c : space_.leaves()) {
+    if (!cell_active_[static_cast<std::size_t>(c)] || space_.cell(c).count == 0) continue;
+    const int reader = owner_[static_cast<std::size_t>(c)];
+    for (int n : space_.neighbours(c)) {
+      const auto un = static_cast<std::size_t>(n);
+      if (!cell_active_[un] || owner_[un] == reader) continue;
+      if (owner_[un] == rank_) {
+        auto& to = send_to_[un];
+        if (std::find(to.begin(), to.end(), reader) == to.end()) to.push_back(reader);
+      }
+      if (reader == rank_) need_recv_[un] = 1;
+    }
+  }
+  for (auto& to : send_to_) std::sort(to.begin(), to.end());
+}
+
+void Engine::post_receives() {
+  recv_handle_.assign(space_.cells().size(), -1);
+  for (int t : step_tasks_) {
+    const tasks::Task& task = graph_.task(t);
+    if (task.type != types_.recv) continue;
+    recv_handle_[static_cast<std::size_t>(task.ci)] =
+        ranks_->post_recv(owner_[static_cast<std::size_t>(task.ci)], task.ci, ghost_results_bytes(space_, task.ci));
+  }
+}
+
+void Engine::sync_owned_cells(bool gas_cells_only) {
+  auto sends = [&](int c, int r) {
+    const auto uc = static_cast<std::size_t>(c);
+    return cell_active_[uc] && owner_[uc] == r && (!gas_cells_only || space_.cell(c).count > 0);
+  };
+  sync_buffer_.clear();  // keeps its capacity from step to step
+  MessageWriter w(sync_buffer_);
+  for (int c : space_.leaves())
+    if (sends(c, rank_)) pack_cell_state(w, space_, gas_, dm_, c, gas_moved_, dm_moved_);
+  const auto all = ranks_->allgather(sync_buffer_);
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    MessageReader in(all[static_cast<std::size_t>(r)]);
+    for (int c : space_.leaves())
+      if (sends(c, r)) unpack_cell_state(in, space_, gas_, dm_, c, gas_moved_, dm_moved_);
+    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more cell state than expected", r));
+  }
+}
+
+void Engine::sync_feedback_sites() {
+  auto sends = [&](int c, int r) {
+    const auto uc = static_cast<std::size_t>(c);
+    return cell_active_[uc] && owner_[uc] == r && space_.cell(c).count > 0;
+  };
+  domain::RankExchange::Buffer mine;
+  MessageWriter w(mine);
+  for (int c : space_.leaves())
+    if (sends(c, rank_)) pack_feedback_sites(w, sf_->cells[static_cast<std::size_t>(c)]);
+  const auto all = ranks_->allgather(mine);
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    MessageReader in(all[static_cast<std::size_t>(r)]);
+    for (int c : space_.leaves())
+      if (sends(c, r)) unpack_feedback_sites(in, sf_->cells[static_cast<std::size_t>(c)]);
+    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more feedback sites than expected", r));
+  }
+}
+
+void Engine::finish_exchanges() {
+  const auto t0 = std::chrono::steady_clock::now();
+  ranks_->finish();
+  add_measured_costs();
+  // What each rank's tasks changed reaches every other rank; then the decisions every rank
+  // must take alike (recut the cells, shorten whose steps) are made from the same data.
+  sync_owned_cells(false);
+  if (config_.hydro.timestep_limiter) ranks_->min(gas_.wake_bin);
+  ctx_->cover_exceeded = ranks_->any(ctx_->cover_exceeded.load());
+  ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));
+  exchange_s_ += seconds_since(t0);
+}
+
+void Engine::add_measured_costs() {
+  const std::vector<tasks::TaskRecord>& records = record_timeline_ ? records_ : mpi_records_;
+  if (leaf_cost_.size() != space_.cells().size()) leaf_cost_.assign(space_.cells().size(), 0.0);
+  for (int t : step_tasks_) {
+    const tasks::Task& task = graph_.task(t);
+    const tasks::TaskRecord& rec = records[static_cast<std::size_t>(t)];
+    if (task.ci < 0 || rec.thread < 0 || task.type == types_.recv) continue;
+    leaf_cost_[static_cast<std::size_t>(task.ci)] += static_cast<double>(rec.end_ns - rec.start_ns);
+  }
+}
+
+}  // namespace fountain
