@@ -155,6 +155,10 @@ class Engine {
   void poll_receives(std::span<const int> waiting, std::vector<int>& opened);  // the recv gates
   void sync_owned_cells(bool gas_cells_only);  // every rank's active cells to every other rank
   void sync_feedback_sites();
+  // Each rank's active leaves (with gas, if asked), packed by `pack`, to every other rank.
+  template <class Pack, class Unpack>
+  void exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
+                              const char* what);
   void finish_exchanges();
   void add_measured_costs();
 

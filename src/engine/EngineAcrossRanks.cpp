@@ -145,42 +145,42 @@ void Engine::post_receives() {
   }
 }
 
-void Engine::sync_owned_cells(bool gas_cells_only) {
+template <class Pack, class Unpack>
+void Engine::exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
+                                    const char* what) {
+  // Every rank knows every leaf's owner and activity, so each reads the others' messages
+  // leaf by leaf without being told which leaves they hold.
   auto sends = [&](int c, int r) {
     const auto uc = static_cast<std::size_t>(c);
-    return cell_active_[uc] && owner_[uc] == r && (!gas_cells_only || space_.cell(c).count > 0);
+    return cell_active_[uc] && owner_[uc] == r && (!gas_leaves_only || space_.cell(c).count > 0);
   };
-  sync_buffer_.clear();  // keeps its capacity from step to step
-  MessageWriter w(sync_buffer_);
+  buffer.clear();  // keeps its capacity from step to step
+  MessageWriter w(buffer);
   for (int c : space_.leaves())
-    if (sends(c, rank_)) pack_cell_state(w, space_, gas_, dm_, c, gas_moved_, dm_moved_);
-  const auto all = ranks_->allgather(sync_buffer_);
+    if (sends(c, rank_)) pack(w, c);
+  const auto all = ranks_->allgather(buffer);
   for (int r = 0; r < ranks_->size(); ++r) {
     if (r == rank_) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
     for (int c : space_.leaves())
-      if (sends(c, r)) unpack_cell_state(in, space_, gas_, dm_, c, gas_moved_, dm_moved_);
-    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more cell state than expected", r));
+      if (sends(c, r)) unpack(in, c);
+    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more {} than expected", r, what));
   }
 }
 
+void Engine::sync_owned_cells(bool gas_cells_only) {
+  exchange_active_leaves(
+      gas_cells_only, sync_buffer_,
+      [&](MessageWriter& w, int c) { pack_cell_state(w, space_, gas_, dm_, c, gas_moved_, dm_moved_); },
+      [&](MessageReader& r, int c) { unpack_cell_state(r, space_, gas_, dm_, c, gas_moved_, dm_moved_); }, "cell state");
+}
+
 void Engine::sync_feedback_sites() {
-  auto sends = [&](int c, int r) {
-    const auto uc = static_cast<std::size_t>(c);
-    return cell_active_[uc] && owner_[uc] == r && space_.cell(c).count > 0;
-  };
-  domain::RankExchange::Buffer mine;
-  MessageWriter w(mine);
-  for (int c : space_.leaves())
-    if (sends(c, rank_)) pack_feedback_sites(w, sf_->cells[static_cast<std::size_t>(c)]);
-  const auto all = ranks_->allgather(mine);
-  for (int r = 0; r < ranks_->size(); ++r) {
-    if (r == rank_) continue;
-    MessageReader in(all[static_cast<std::size_t>(r)]);
-    for (int c : space_.leaves())
-      if (sends(c, r)) unpack_feedback_sites(in, sf_->cells[static_cast<std::size_t>(c)]);
-    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more feedback sites than expected", r));
-  }
+  exchange_active_leaves(
+      true, sync_buffer_,
+      [&](MessageWriter& w, int c) { pack_feedback_sites(w, sf_->cells[static_cast<std::size_t>(c)]); },
+      [&](MessageReader& r, int c) { unpack_feedback_sites(r, sf_->cells[static_cast<std::size_t>(c)]); },
+      "feedback sites");
 }
 
 void Engine::finish_exchanges() {
