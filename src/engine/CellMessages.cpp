@@ -7,35 +7,17 @@ static_assert(std::is_trivially_copyable_v<starformation::FeedbackSite>);
 static_assert(std::is_trivially_copyable_v<starformation::StarFormationTally>);
 
 namespace {
-// Packs or unpacks the slice [first, first + count) of each field it is handed.
-struct PackSlice {
+// Packs, or unpacks, the slice [first, first + count) of each field it is handed: all of it,
+// or only the particles flagged (when `flag`, indexed by particle, is given).
+struct PackFields {
   MessageWriter& w;
   std::size_t first, count;
-  const void* skip = nullptr;
-  template <class T>
-  void operator()(std::vector<T>& f) const {
-    if (static_cast<const void*>(&f) != skip) w.put(f.data() + first, count);
-  }
-};
-struct UnpackSlice {
-  MessageReader& r;
-  std::size_t first, count;
-  const void* skip = nullptr;
-  template <class T>
-  void operator()(std::vector<T>& f) const {
-    if (static_cast<const void*>(&f) != skip) r.get(f.data() + first, count);
-  }
-};
-
-// The same for the flagged particles of a slice only.
-struct PackFlagged {
-  MessageWriter& w;
-  std::size_t first, count;
-  std::span<const char> flag;
+  std::span<const char> flag = {};
   const void* skip = nullptr;
   template <class T>
   void operator()(std::vector<T>& f) const {
     if (static_cast<const void*>(&f) == skip) return;
+    if (flag.empty()) return w.put(f.data() + first, count);
     std::size_t n = 0;
     for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
     char* out = w.grow(n * sizeof(T));
@@ -46,14 +28,15 @@ struct PackFlagged {
       }
   }
 };
-struct UnpackFlagged {
+struct UnpackFields {
   MessageReader& r;
   std::size_t first, count;
-  std::span<const char> flag;
+  std::span<const char> flag = {};
   const void* skip = nullptr;
   template <class T>
   void operator()(std::vector<T>& f) const {
     if (static_cast<const void*>(&f) == skip) return;
+    if (flag.empty()) return r.get(f.data() + first, count);
     std::size_t n = 0;
     for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
     const char* in = r.take(n * sizeof(T));
@@ -76,8 +59,8 @@ void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, Co
                      std::span<const char> gas_moved, std::span<const char> dm_moved) {
   const Cell& cell = space.cell(c);
   w.put(cell);
-  gas.for_each_field(PackFlagged{w, cell.first, cell.count, gas_moved, &gas.wake_bin});
-  dm.for_each_field(PackFlagged{w, cell.dm_first, cell.dm_count, dm_moved});
+  gas.for_each_field(PackFields{w, cell.first, cell.count, gas_moved, &gas.wake_bin});
+  dm.for_each_field(PackFields{w, cell.dm_first, cell.dm_count, dm_moved});
 }
 
 void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
@@ -88,20 +71,20 @@ void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, Collis
       sent.dm_count != cell.dm_count)
     throw std::logic_error("ranks disagree on a cell's particles");
   cell = sent;
-  gas.for_each_field(UnpackFlagged{r, cell.first, cell.count, gas_moved, &gas.wake_bin});
-  dm.for_each_field(UnpackFlagged{r, cell.dm_first, cell.dm_count, dm_moved});
+  gas.for_each_field(UnpackFields{r, cell.first, cell.count, gas_moved, &gas.wake_bin});
+  dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved});
 }
 
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
   const Cell& cell = space.cell(c);
   w.put(cell.h_max);
-  ghost_fields(gas, PackSlice{w, cell.first, cell.count});
+  ghost_fields(gas, PackFields{w, cell.first, cell.count});
 }
 
 void unpack_ghost_results(MessageReader& r, Space& space, GasParticles& gas, int c) {
   Cell& cell = space.cell(c);
   cell.h_max = r.get<double>();
-  ghost_fields(gas, UnpackSlice{r, cell.first, cell.count});
+  ghost_fields(gas, UnpackFields{r, cell.first, cell.count});
 }
 
 std::size_t ghost_results_bytes(const Space& space, int c) {
