@@ -116,10 +116,8 @@ void Engine::rebuild() {
     for (int c : space_.leaves())
       if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
   }
-  const auto t_rebuild = std::chrono::steady_clock::now();
   space_.rebuild(gas_, dm_);
   if (ranks_) assign_owners(measured);
-  rebuild_s_ += seconds_since(t_rebuild);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
   auto step_end = [&](TimeBin bin, IntegerTime ti_begin) {

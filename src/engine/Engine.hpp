@@ -118,18 +118,14 @@ class Engine {
   // Whether any rank says yes (the one rank's answer when alone): for decisions that every
   // rank must take together, such as writing a restart file.
   bool any_rank(bool yes) const;
-  // The rank owning each leaf (empty on one rank), and how often the cut was chosen anew.
-  const std::vector<int>& owners() const { return owner_; }
+  // How often the cut of the leaves between ranks was chosen.
   int partitions() const { return partitions_; }
-  // max over ranks of the estimated work / mean - 1, when owners were last set.
-  double last_imbalance() const { return last_imbalance_; }
-  // Wall seconds since the start: in the task graph, in the exchanges after it (across
-  // ranks: waiting for the slowest rank, then the cells' state), in recutting the cells.
+  // Wall seconds since the start: in the task graphs, and in the exchanges after them
+  // (across ranks: waiting for the slowest rank, then the cells' state).
   double graph_seconds() const { return graph_s_; }
   // The exchanges after the last graph, in ns since it began ({0, 0} when running alone).
   std::pair<std::int64_t, std::int64_t> last_exchange_ns() const { return last_exchange_ns_; }
   double exchange_seconds() const { return exchange_s_; }
-  double rebuild_seconds() const { return rebuild_s_; }
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
@@ -202,8 +198,7 @@ class Engine {
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
   std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
-  double last_imbalance_ = 0.0;             // of the work estimate when owners were last set
-  double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
+  double graph_s_ = 0.0, exchange_s_ = 0.0;
   std::pair<std::int64_t, std::int64_t> last_exchange_ns_{0, 0};
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others

@@ -107,7 +107,6 @@ void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured)
     leaf_owner = owners_from_cuts();
     ++partitions_;
   }
-  last_imbalance_ = domain::imbalance(work, leaf_owner, n);
   owner_.assign(space_.cells().size(), 0);
   for (std::size_t l = 0; l < nl; ++l) owner_[static_cast<std::size_t>(leaves[l])] = leaf_owner[l];
   leaf_cost_.assign(space_.cells().size(), 0.0);
