@@ -1,0 +1,134 @@
+// What ranks send each other about a cell: packed and unpacked, every field comes back exactly, and nothing else is touched.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "engine/CellMessages.hpp"
+#include "space/Space.hpp"
+
+namespace fountain {
+namespace {
+
+// Fills every field of both stores with values that differ per particle and per seed.
+template <class Store>
+void scramble(Store& s, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  s.for_each_field([&](auto& field) {
+    for (auto& v : field) {
+      // Random bytes, as a rank's state holds whatever the physics left there.
+      unsigned char bytes[sizeof(v)];
+      for (auto& b : bytes) b = static_cast<unsigned char>(rng());
+      std::memcpy(&v, bytes, sizeof(v));
+    }
+  });
+}
+
+template <class Store>
+bool same_particle(Store& a, Store& b, std::size_t i, const void* skip_a = nullptr) {
+  bool same = true;
+  std::vector<const void*> fields_b;
+  b.for_each_field([&](auto& f) { fields_b.push_back(&f); });
+  std::size_t k = 0;
+  a.for_each_field([&](auto& f) {
+    using V = std::decay_t<decltype(f)>;
+    const V& g = *static_cast<const V*>(fields_b[k++]);
+    if (static_cast<const void*>(&f) == skip_a) return;
+    same = same && std::memcmp(&f[i], &g[i], sizeof(f[i])) == 0;
+  });
+  return same;
+}
+
+struct TwoRanks : ::testing::Test {
+  GasParticles gas;
+  CollisionlessParticles dm;
+  Space space{SpaceConfig{}};
+  void SetUp() override {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    gas.resize(600);
+    dm.resize(300);
+    for (auto& x : gas.x) x = {u(rng), u(rng), u(rng)};
+    for (auto& x : dm.x) x = {u(rng), u(rng), u(rng)};
+    for (std::size_t i = 0; i < gas.size(); ++i) gas.h[i] = 0.05, gas.id[i] = i;
+    for (std::size_t i = 0; i < dm.size(); ++i) dm.id[i] = 1000 + i;
+    SpaceConfig c;
+    c.split_size = 64;
+    space = Space(c);
+    space.rebuild(gas, dm);
+  }
+};
+
+TEST_F(TwoRanks, CellStateCarriesTheFlaggedParticlesOnlyAndNeverTheWakeRequests) {
+  const int c = space.leaves()[space.leaves().size() / 2];
+  const Cell cell = space.cell(c);
+  ASSERT_GT(cell.count, 2u);
+  // The sender's state, and a receiver whose copy differs everywhere.
+  GasParticles sent_gas = gas, got_gas = gas;
+  CollisionlessParticles sent_dm = dm, got_dm = dm;
+  scramble(sent_gas, 1);
+  scramble(sent_dm, 2);
+  scramble(got_gas, 3);
+  scramble(got_dm, 4);
+  // Identity and the cell's ranges come from the shared recut, so they agree on both sides.
+  sent_gas.id = got_gas.id = gas.id;
+  std::vector<char> gas_moved(gas.size(), 0), dm_moved(dm.size(), 0);
+  for (std::size_t i = cell.first; i < cell.first + cell.count; i += 2) gas_moved[i] = 1;
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; i += 3) dm_moved[i] = 1;
+  const GasParticles before_gas = got_gas;
+  const CollisionlessParticles before_dm = got_dm;
+
+  std::vector<char> buffer;
+  MessageWriter w(buffer);
+  Space sender = space;
+  sender.cell(c).h_max = 0.123;
+  pack_cell_state(w, sender, sent_gas, sent_dm, c, gas_moved, dm_moved);
+  MessageReader r(buffer);
+  unpack_cell_state(r, space, got_gas, got_dm, c, gas_moved, dm_moved);
+  EXPECT_TRUE(r.done()) << "the message holds more than the reader took";
+  EXPECT_EQ(space.cell(c).h_max, 0.123) << "the cell record travels with it";
+
+  GasParticles before_gas_copy = before_gas;
+  CollisionlessParticles before_dm_copy = before_dm;
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    if (gas_moved[i]) {
+      EXPECT_TRUE(same_particle(got_gas, sent_gas, i, &got_gas.wake_bin)) << "gas particle " << i << " not carried";
+      EXPECT_EQ(got_gas.wake_bin[i], before_gas.wake_bin[i]) << "wake request of " << i << " overwritten";
+    } else {
+      EXPECT_TRUE(same_particle(got_gas, before_gas_copy, i)) << "unflagged gas particle " << i << " changed";
+    }
+  }
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    if (dm_moved[i]) EXPECT_TRUE(same_particle(got_dm, sent_dm, i)) << "dark matter particle " << i << " not carried";
+    else EXPECT_TRUE(same_particle(got_dm, before_dm_copy, i)) << "unflagged dark matter particle " << i << " changed";
+  }
+}
+
+TEST_F(TwoRanks, GhostResultsFitTheirAnnouncedSizeAndComeBackExactly) {
+  const int c = space.leaves().front();
+  GasParticles sent = gas, got = gas;
+  scramble(sent, 5);
+  std::vector<char> buffer;
+  MessageWriter w(buffer);
+  pack_ghost_results(w, space, sent, c);
+  EXPECT_EQ(buffer.size(), ghost_results_bytes(space, c)) << "the receive is posted with this size";
+  MessageReader r(buffer);
+  unpack_ghost_results(r, space, got, c);
+  const Cell& cell = space.cell(c);
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    EXPECT_EQ(std::memcmp(&got.rho[i], &sent.rho[i], sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(&got.p_over_rho_a[i], &sent.p_over_rho_a[i], sizeof(double)), 0);
+    EXPECT_EQ(got.courant_bin[i], sent.courant_bin[i]);
+    EXPECT_EQ(std::memcmp(&got.x[i], &gas.x[i], sizeof(Vec3)), 0) << "positions are not ghost results";
+  }
+}
+
+TEST_F(TwoRanks, ReaderRefusesAShortMessage) {
+  std::vector<char> buffer(3);
+  MessageReader r(buffer);
+  EXPECT_THROW((void)r.get<double>(), std::logic_error);
+}
+
+}  // namespace
+}  // namespace fountain
