@@ -84,7 +84,6 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   }
   const bool polling = !pending.empty();
   tbb::task_arena& arena = polling ? *polling_arena_ : *arena_;
-  std::atomic<std::size_t> gates_left{pending.size()};
 
   std::atomic<std::int64_t> busy{0};
   std::atomic<int> done{0};
@@ -118,7 +117,6 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         pending.erase(std::find(pending.begin(), pending.end(), t));
         if (wait[static_cast<std::size_t>(t)].fetch_sub(1, std::memory_order_acq_rel) == 1) spawn(t);
       }
-      gates_left.store(pending.size(), std::memory_order_release);
       return !opened_now.empty();
     };
     process = [&](int first) {
@@ -191,7 +189,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     // then waits, without joining the work (so no more than `threads_` threads compute),
     // for the last task to wake it.
     std::chrono::microseconds nap{20};
-    while (polling && gates_left.load(std::memory_order_acquire) > 0 && !failed.load()) {
+    while (!pending.empty() && !failed.load()) {
       if (open_gates()) {
         nap = std::chrono::microseconds{20};
       } else {

@@ -115,15 +115,14 @@ int RankExchange::post_recv(int source, int tag, std::size_t bytes) {
 
 void RankExchange::test_recvs(std::span<const int> handles, std::vector<int>& arrived) {
   std::vector<MPI_Request> requests;
-  std::vector<int> which;
-  requests.reserve(handles.size());
-  for (int h : handles) {
-    auto& p = impl_->recvs[static_cast<std::size_t>(h)];
+  std::vector<int> position;  // in `handles`, of each request tested
+  for (std::size_t k = 0; k < handles.size(); ++k) {
+    auto& p = impl_->recvs[static_cast<std::size_t>(handles[k])];
     if (p.done) {
-      arrived.push_back(h);
+      arrived.push_back(static_cast<int>(k));
     } else {
       requests.push_back(p.request);
-      which.push_back(h);
+      position.push_back(static_cast<int>(k));
     }
   }
   if (requests.empty()) return;
@@ -132,12 +131,12 @@ void RankExchange::test_recvs(std::span<const int> handles, std::vector<int>& ar
   check(MPI_Testsome(static_cast<int>(requests.size()), requests.data(), &count, indices.data(), MPI_STATUSES_IGNORE),
         "Testsome");
   if (count == MPI_UNDEFINED) return;
-  for (int k = 0; k < count; ++k) {
-    const int h = which[static_cast<std::size_t>(indices[static_cast<std::size_t>(k)])];
-    auto& p = impl_->recvs[static_cast<std::size_t>(h)];
+  for (int n = 0; n < count; ++n) {
+    const int k = position[static_cast<std::size_t>(indices[static_cast<std::size_t>(n)])];
+    auto& p = impl_->recvs[static_cast<std::size_t>(handles[static_cast<std::size_t>(k)])];
     p.request = MPI_REQUEST_NULL;
     p.done = true;
-    arrived.push_back(h);
+    arrived.push_back(k);
   }
 }
 

@@ -37,8 +37,8 @@ class RankExchange {
   // Point to point: receives are posted before the tasks that need them run (their handle
   // is an index), sends are posted by tasks and completed together once the graph is done.
   int post_recv(int source, int tag, std::size_t bytes);
-  // Non-blocking, one test for many: appends to `arrived` the handles among `handles` whose
-  // message is in.
+  // Non-blocking, one test for many: appends to `arrived` the positions in `handles` of
+  // those whose message is in.
   void test_recvs(std::span<const int> handles, std::vector<int>& arrived);
   const Buffer& wait_recv(int handle);   // blocks until it has
   void post_send(int dest, int tag, Buffer data);

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 
 #include "analysis/Diagnostics.hpp"
 #include "core/Error.hpp"
@@ -99,23 +98,8 @@ void Engine::rebuild() {
   // Every particle must sit at the current time before cells are recut.
   drift_all();
   remove_dissolved();
-  // The work each rank measured in its cells since owners were last chosen, located by the
-  // cells' centres so it can be binned into the new top-level grid. Summed in rank order
-  // from an allgather (not a reduction, whose rounding may differ between ranks).
-  std::vector<std::pair<Vec3, double>> measured;
-  if (ranks_ && !leaf_cost_.empty()) {
-    domain::RankExchange::Buffer mine(leaf_cost_.size() * sizeof(double));
-    std::memcpy(mine.data(), leaf_cost_.data(), mine.size());
-    const auto all = ranks_->allgather(mine);
-    std::vector<double> total(leaf_cost_.size(), 0.0), part(leaf_cost_.size());
-    for (const auto& b : all) {
-      if (b.size() != mine.size()) throw std::logic_error("ranks disagree on the number of cells");
-      std::memcpy(part.data(), b.data(), b.size());
-      for (std::size_t c = 0; c < total.size(); ++c) total[c] += part[c];
-    }
-    for (int c : space_.leaves())
-      if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
-  }
+  // Measured before the recut, while the cells it was measured in still stand.
+  const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
   space_.rebuild(gas_, dm_);
   if (ranks_) assign_owners(measured);
   // A particle whose step ends now is due; one whose step began now (a rebuild between

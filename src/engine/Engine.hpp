@@ -145,6 +145,7 @@ class Engine {
   void run_graph(StepInfo* info);
   void guess_smoothing_lengths();
   bool mine(int c) const { return owner_.empty() || owner_[static_cast<std::size_t>(c)] == rank_; }
+  std::vector<std::pair<Vec3, double>> measured_work() const;  // (leaf centre, task ns) over all ranks
   void assign_owners(const std::vector<std::pair<Vec3, double>>& measured);
   void plan_ghost_exchange();
   void post_receives();

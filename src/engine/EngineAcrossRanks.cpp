@@ -6,7 +6,6 @@
 #include <chrono>
 #include <cstring>
 #include <limits>
-#include <unordered_map>
 
 #include "domain/DomainDecomposition.hpp"
 #include "domain/RankExchange.hpp"
@@ -24,14 +23,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 void Engine::poll_receives(std::span<const int> waiting, std::vector<int>& opened) {
   std::vector<int> handles, arrived;
-  std::unordered_map<int, int> task_of;
-  for (int t : waiting) {
-    const int h = recv_handle_[static_cast<std::size_t>(graph_.task(t).ci)];
-    handles.push_back(h);
-    task_of[h] = t;
-  }
+  for (int t : waiting) handles.push_back(recv_handle_[static_cast<std::size_t>(graph_.task(t).ci)]);
   ranks_->test_recvs(handles, arrived);
-  for (int h : arrived) opened.push_back(task_of[h]);
+  for (int k : arrived) opened.push_back(waiting[static_cast<std::size_t>(k)]);
 }
 
 int Engine::rank() const { return rank_; }
@@ -40,6 +34,26 @@ bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; 
 std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
 std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
 std::uint64_t Engine::ghost_bytes_sent() const { return ranks_ ? ranks_->traffic().point_to_point_bytes : 0; }
+
+std::vector<std::pair<Vec3, double>> Engine::measured_work() const {
+  // The work each rank measured in its leaves since owners were last chosen, located by the
+  // leaves' centres so that it can be given to the leaves of the next recut. Summed in rank
+  // order from an allgather (not a reduction, whose rounding may differ between ranks).
+  std::vector<std::pair<Vec3, double>> measured;
+  if (leaf_cost_.empty()) return measured;
+  domain::RankExchange::Buffer mine(leaf_cost_.size() * sizeof(double));
+  std::memcpy(mine.data(), leaf_cost_.data(), mine.size());
+  const auto all = ranks_->allgather(mine);
+  std::vector<double> total(leaf_cost_.size(), 0.0), part(leaf_cost_.size());
+  for (const auto& b : all) {
+    if (b.size() != mine.size()) throw std::logic_error("ranks disagree on the number of cells");
+    std::memcpy(part.data(), b.data(), b.size());
+    for (std::size_t c = 0; c < total.size(); ++c) total[c] += part[c];
+  }
+  for (int c : space_.leaves())
+    if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
+  return measured;
+}
 
 void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured) {
   // Owners are chosen per leaf, not per top-level cell: every rank holds every particle, so
