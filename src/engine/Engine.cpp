@@ -152,16 +152,17 @@ void Engine::build_graph() {
   // with the other ranks, which call them in this order).
   if (star_formation) graph_.depends(star_formation_done_task_, feedback_apply_task_);
   if (star_formation) sf_->cells.assign(ncells, {});
-  struct Pair { int task, ci, cj; };
-  std::vector<Pair> dpairs, fpairs;
+  // The density and force tasks of a cell read its neighbour cells: (task, reader) edges.
+  struct Reader { int task, ci; };
+  std::vector<Reader> dreaders, freaders;
   std::size_t npairs = 0;
   for (int c : leaves) npairs += space_.neighbours(c).size();
   const bool gravity = config_.gravity.enabled;
-  graph_.reserve(9 * leaves.size() + 2 * npairs + 1, 2 * npairs + 3 * leaves.size());
+  graph_.reserve(9 * leaves.size() + 1, 3 * npairs + 3 * leaves.size());
   // One tree per step, from every cell's drifted particles; each cell's walk reads it.
   gravity_tree_task_ = gravity ? graph_.add(types_.gravity_tree, -1, -1, -1) : -1;
-  dpairs.reserve(npairs);
-  fpairs.reserve(npairs);
+  dreaders.reserve(leaves.size());
+  freaders.reserve(leaves.size());
   cell_tasks_.assign(ncells, {-1, -1});
   // Across ranks: a cell's ghost results are sent once its ghost is done; a foreign cell's
   // arrive by a receive that its readers wait for. A receive runs only once its message is
@@ -175,8 +176,7 @@ void Engine::build_graph() {
     // of a foreign cell may still be running then.
     if (star_formation && ranks_) graph_.depends(drift[c], star_formation_done_task_);
     if (space_.cell(c).count > 0) {
-      graph_.add(types_.density_self, c, -1, c);
-      for (int n : space_.neighbours(c)) dpairs.push_back({graph_.add(types_.density_pair, c, n, c), c, n});
+      dreaders.push_back({graph_.add(types_.density, c, -1, c), c});
       ghost[c] = graph_.add(types_.ghost, c, -1, c);
       if (ranks_) {
         // Explicit edges, not the cell's write chain: a send that is not listed this run
@@ -186,8 +186,7 @@ void Engine::build_graph() {
         recv_task_[c] = graph_.add(types_.recv, c, -1, -1);
         graph_.depends(drift[c], recv_task_[c]);
       }
-      graph_.add(types_.force_self, c, -1, c);
-      for (int n : space_.neighbours(c)) fpairs.push_back({graph_.add(types_.force_pair, c, n, c), c, n});
+      freaders.push_back({graph_.add(types_.force, c, -1, c), c});
     }
     if (gravity) {
       const int walk = graph_.add(types_.gravity, c, -1, c);
@@ -212,12 +211,14 @@ void Engine::build_graph() {
   }
   // Reads of a neighbour cell: after its drift (density), after its ghost (force), and
   // before it closes its step (the kick rewrites the predicted state others read).
-  for (const auto& p : dpairs) graph_.depends(drift[p.cj], p.task);
-  for (const auto& p : fpairs) {
-    graph_.depends(ghost[p.cj], p.task);
-    if (ranks_) graph_.depends(recv_task_[p.cj], p.task);
-    graph_.depends(p.task, kick_close[p.cj]);
-  }
+  for (const auto& r : dreaders)
+    for (int n : space_.neighbours(r.ci)) graph_.depends(drift[n], r.task);
+  for (const auto& r : freaders)
+    for (int n : space_.neighbours(r.ci)) {
+      graph_.depends(ghost[n], r.task);
+      if (ranks_) graph_.depends(recv_task_[n], r.task);
+      graph_.depends(r.task, kick_close[n]);
+    }
   graph_.finalize();
 }
 
@@ -281,7 +282,7 @@ std::size_t Engine::activate(Phase phase) {
   const bool exchange = ranks_ && phase != Phase::Density;
   if (exchange) plan_ghost_exchange();
   auto allowed = [&](int type) {
-    if (phase == Phase::Density) return type == types_.density_self || type == types_.density_pair || type == types_.ghost;
+    if (phase == Phase::Density) return type == types_.density || type == types_.ghost;
     if (phase == Phase::Hydro)
       return type != types_.kick_close && type != types_.timestep && type != types_.cooling && type != types_.kick_open &&
              type != types_.star_formation && type != types_.feedback_search;
@@ -339,11 +340,9 @@ void Engine::run_graph(StepInfo* info) {
   if (ranks_) post_receives();
   auto runner = [this, &ctx, &T, sf, &leaves](const tasks::Task& t) {
     if (t.type == T.drift) integration::drift(ctx, t.ci);
-    else if (t.type == T.density_self) hydro::density_self(ctx, t.ci);
-    else if (t.type == T.density_pair) hydro::density_pair(ctx, t.ci, t.cj);
+    else if (t.type == T.density) hydro::density(ctx, t.ci);
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
-    else if (t.type == T.force_self) hydro::force_self(ctx, t.ci);
-    else if (t.type == T.force_pair) hydro::force_pair(ctx, t.ci, t.cj);
+    else if (t.type == T.force) hydro::force(ctx, t.ci);
     else if (t.type == T.gravity_tree) gravity::build_tree(ctx);
     else if (t.type == T.gravity) gravity::walk_cell(ctx, t.ci);
     else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);

@@ -5,17 +5,16 @@
 namespace fountain {
 
 struct TaskTypes {
-  int drift, density_self, density_pair, ghost, force_self, force_pair, gravity_tree, gravity, kick_close, timestep,
+  int drift, density, ghost, force, gravity_tree, gravity, kick_close, timestep,
       cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply, send, recv;
   tasks::TaskTypeRegistry registry;
 
   TaskTypes() {
     drift = registry.add({"drift", "", "integration"});
-    density_self = registry.add({"density", "self", "hydro"});
-    density_pair = registry.add({"density", "pair", "hydro"});
+    // A cell's density and force tasks gather over the cell and all its neighbour cells.
+    density = registry.add({"density", "", "hydro"});
     ghost = registry.add({"ghost", "", "hydro"});
-    force_self = registry.add({"force", "self", "hydro"});
-    force_pair = registry.add({"force", "pair", "hydro"});
+    force = registry.add({"force", "", "hydro"});
     gravity_tree = registry.add({"gravity", "tree", "gravity"});
     gravity = registry.add({"gravity", "walk", "gravity"});
     kick_close = registry.add({"kick", "close", "integration"});

@@ -7,37 +7,39 @@
 
 namespace fountain::hydro {
 
-// Loads every particle of cell `c` into `block` and records on the cell the box (and largest
-// h) of its active particles, for the cell's pair tasks that follow in its chain.
-inline void load_own_cell(const StepContext& ctx, Cell& c, NeighbourBlock& block) {
-  block.clear();
+// Loads into `block` the particles that can reach an active particle of cell `a`: all of its
+// own, then those of each neighbour cell (in the fixed neighbour order, so every particle's
+// sums always add up in the same order) within the active particles' largest h of their box
+// (density: gather) or, when `own_h_reaches`, within the larger of that and their own h
+// (force: r < max(h_i, h_j)). Positions are stored as the periodic image nearest `a`.
+// Returns false when `a` has no active particle. The density loop must not read its
+// neighbours' h (their ghosts may be solving it): it stores h = 0 for them.
+inline bool load_neighbourhood(const StepContext& ctx, int ci, bool own_h_reaches, NeighbourBlock& block) {
+  const Cell& a = ctx.space.cell(ci);
+  std::size_t most = a.count;
+  for (int n : ctx.space.neighbours(ci)) most += ctx.space.cell(n).count;
+  block.reset(most);
   ActiveBox box;
-  for (std::size_t i = c.first; i < c.first + c.count; ++i) {
-    block.add(ctx.gas.x[i], ctx.gas.h[i], i);
+  for (std::size_t i = a.first; i < a.first + a.count; ++i)
     if (ctx.is_active(i)) box.add(ctx.gas.x[i], ctx.gas.h[i]);
-  }
-  c.active_lo = box.lo;
-  c.active_hi = box.hi;
-  c.active_h_max = box.empty ? -1.0 : box.h_max;
-}
-
-// Loads the particles of `b` that can reach an active particle of `a`: within the active
-// particles' largest h of their box (density: gather), or within the larger of that and
-// their own h (force: r < max(h_i, h_j)). Positions are stored as the periodic image
-// nearest `a`'s active box. Returns false when `a` has no active particle.
-inline bool load_neighbours(const StepContext& ctx, const Cell& a, const Cell& b, bool own_h_reaches,
-                            NeighbourBlock& block) {
-  block.clear();
-  const ActiveBox box(a.active_lo, a.active_hi, a.active_h_max);
   if (box.empty) return false;
-  // Leaves are below a quarter of a periodic box, so one image shift serves the whole of b.
-  const Vec3 shift = ctx.space.separation(b.centre(), a.centre()) - (b.centre() - a.centre());
+  for (std::size_t i = a.first; i < a.first + a.count; ++i) block.add(ctx.gas.x[i], ctx.gas.h[i] * ctx.gas.h[i], i);
   const double reach2 = box.h_max * box.h_max;
-  for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-    const Vec3 xj = ctx.gas.x[j] + shift;
-    const double hj = ctx.gas.h[j];
-    const double d2 = box.distance2(xj);
-    if (d2 < reach2 || (own_h_reaches && d2 < hj * hj)) block.add(xj, hj, j);
+  for (int n : ctx.space.neighbours(ci)) {
+    const Cell& b = ctx.space.cell(n);
+    // Leaves are below a quarter of a periodic box, so one image shift serves the whole of b.
+    const Vec3 shift = ctx.space.separation(b.centre(), a.centre()) - (b.centre() - a.centre());
+    // The whole cell out of reach (its particles may have drifted dx_max out of its box)?
+    const Vec3 margin{b.dx_max, b.dx_max, b.dx_max};
+    const ActiveBox cell_box(b.lo + shift - margin, b.lo + b.width + shift + margin, 0.0);
+    const double cell_d2 = box.distance2(cell_box);
+    if (cell_d2 >= reach2 && !(own_h_reaches && cell_d2 < b.h_max * b.h_max)) continue;
+    for (std::size_t j = b.first; j < b.first + b.count; ++j) {
+      const Vec3 xj = ctx.gas.x[j] + shift;
+      const double d2 = box.distance2(xj);
+      const double hj2 = own_h_reaches ? ctx.gas.h[j] * ctx.gas.h[j] : 0.0;
+      block.add_if((d2 < reach2) | (d2 < hj2), xj, hj2, j);
+    }
   }
   return true;
 }

@@ -49,23 +49,16 @@ void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) 
 
 }  // namespace
 
-void density_self(StepContext& ctx, int ci) {
+void density(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
-  Cell& c = ctx.space.cell(ci);
-  thread_local NeighbourBlock block;
-  load_own_cell(ctx, c, block);
+  const Cell& c = ctx.space.cell(ci);
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
     if (!ctx.is_active(i)) continue;
     gas.rho[i] = gas.wcount[i] = gas.wcount_dh[i] = gas.div_v[i] = 0.0;
     gas.curl_v[i] = {};
   }
-  density_sums(ctx, c, block);
-}
-
-void density_pair(StepContext& ctx, int ci, int cj) {
-  const Cell& a = ctx.space.cell(ci);
   thread_local NeighbourBlock block;
-  if (load_neighbours(ctx, a, ctx.space.cell(cj), false, block) && block.size() > 0) density_sums(ctx, a, block);
+  if (load_neighbourhood(ctx, ci, false, block)) density_sums(ctx, c, block);
 }
 
 }  // namespace fountain::hydro

@@ -80,25 +80,17 @@ void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
 
 }  // namespace
 
-void force_self(StepContext& ctx, int ci) {
+void force(StepContext& ctx, int ci) {
   GasParticles& gas = ctx.gas;
-  Cell& c = ctx.space.cell(ci);
-  thread_local NeighbourBlock block;
-  // h has changed since the density loop: the pair tasks need the box with the new h.
-  load_own_cell(ctx, c, block);
+  const Cell& c = ctx.space.cell(ci);
   for (std::size_t i = c.first; i < c.first + c.count; ++i) {
     if (!ctx.is_active(i)) continue;
     gas.a_hydro[i] = {};
     gas.du_dt[i] = 0.0;
     gas.limit_bin[i] = kNoBin;
   }
-  force_sums(ctx, c, block);
-}
-
-void force_pair(StepContext& ctx, int ci, int cj) {
-  const Cell& a = ctx.space.cell(ci);
   thread_local NeighbourBlock block;
-  if (load_neighbours(ctx, a, ctx.space.cell(cj), true, block) && block.size() > 0) force_sums(ctx, a, block);
+  if (load_neighbourhood(ctx, ci, true, block)) force_sums(ctx, c, block);
 }
 
 }  // namespace fountain::hydro

@@ -12,6 +12,9 @@ namespace fountain::hydro {
 
 namespace {
 
+// The first search radius for an unconverged h, in units of its current value.
+constexpr double kFirstReach = 1.5;
+
 struct Candidate {
   Vec3 dx, dv;
   double r2, m;
@@ -28,6 +31,12 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
   const double r2max = radius * radius;
   auto scan = [&](int cj) {
     const Cell& b = ctx.space.cell(cj);
+    // Skip a neighbour cell whose particles, however far they drifted, are all out of reach.
+    const Vec3 d = ctx.space.separation(gas.x[i], b.centre());
+    const Vec3 out_of_box{std::max(0.0, std::fabs(d.x) - 0.5 * b.width.x), std::max(0.0, std::fabs(d.y) - 0.5 * b.width.y),
+                          std::max(0.0, std::fabs(d.z) - 0.5 * b.width.z)};
+    const double gap = std::sqrt(dot(out_of_box, out_of_box)) - b.dx_max;
+    if (gap > 0.0 && gap * gap >= r2max) return;
     for (std::size_t j = b.first; j < b.first + b.count; ++j) {
       const Vec3 dx = ctx.space.separation(gas.x[i], gas.x[j]);
       const double r2 = dot(dx, dx);
@@ -73,8 +82,16 @@ void ghost(StepContext& ctx, int ci) {
     DensityResult res = finish_density(s, h);
     const bool converged = std::fabs(res.wcount - p.neighbours) <= p.neighbours_tolerance && h <= h_limit;
     if (!converged) {
-      gather_candidates(ctx, ci, i, h_limit, cand);
-      const DensityResult at_limit = finish_density(sums_at(cand, h_limit), h_limit);
+      // h rarely changes by much in a step: bracket it within a modest radius first, and
+      // search out to the cell's reach only when that radius holds too few neighbours.
+      double reach = h > 0.0 ? std::min(h_limit, kFirstReach * h) : h_limit;
+      gather_candidates(ctx, ci, i, reach, cand);
+      DensityResult at_limit = finish_density(sums_at(cand, reach), reach);
+      if (at_limit.wcount < p.neighbours - p.neighbours_tolerance && reach < h_limit) {
+        reach = h_limit;
+        gather_candidates(ctx, ci, i, reach, cand);
+        at_limit = finish_density(sums_at(cand, reach), reach);
+      }
       if (at_limit.wcount < p.neighbours - p.neighbours_tolerance) {
         // Not enough neighbours within reach: take the reach and ask for a rebuild.
         h = h_limit;
@@ -84,8 +101,8 @@ void ghost(StepContext& ctx, int ci) {
           ctx.h_capped.fetch_add(1, std::memory_order_relaxed);
         }
       } else {
-        double lo = 0.0, hi = h_limit;
-        if (!(h > 0.0 && h < h_limit)) h = 0.5 * h_limit;
+        double lo = 0.0, hi = reach;
+        if (!(h > 0.0 && h < reach)) h = 0.5 * reach;
         bool done = false;
         for (int it = 0; it < p.max_h_iterations; ++it) {
           res = finish_density(sums_at(cand, h), h);

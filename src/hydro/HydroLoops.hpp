@@ -5,19 +5,17 @@
 
 namespace fountain::hydro {
 
-// Density loop, gather form: each task updates only the active particles of `ci`.
-// density_self also clears the sums, so it must run first in the cell's chain.
-void density_self(StepContext& ctx, int ci);
-void density_pair(StepContext& ctx, int ci, int cj);
+// Density loop, gather form: the sums of the active particles of `ci` over its own and its
+// neighbour cells' particles, in one task (it writes only `ci`).
+void density(StepContext& ctx, int ci);
 
 // The ghost: turns the sums into densities and solves each active particle's h so that
 // its weighted neighbour number is N_ngb within the tolerance (Newton with bisection).
 void ghost(StepContext& ctx, int ci);
 
-// Force loop, gather form: accelerations, du/dt and signal velocities of active particles.
-// force_self clears the sums and must run first among the force tasks of `ci`.
-void force_self(StepContext& ctx, int ci);
-void force_pair(StepContext& ctx, int ci, int cj);
+// Force loop, gather form: accelerations, du/dt and timestep-limiter bins of the active
+// particles of `ci`, over its own and its neighbour cells' particles, in one task.
+void force(StepContext& ctx, int ci);
 
 // The state the MSPH rule sees of particle i this step.
 inline MsphState msph_state(const GasParticles& gas, std::size_t i) {

@@ -17,20 +17,39 @@ struct NeighbourBlock {
   std::vector<double> r2;        // scratch: squared distances to the particle being updated
   std::vector<std::uint32_t> hit;  // scratch: the candidates within reach of that particle
 
-  void clear() { x.clear(); y.clear(); z.clear(); h2.clear(); index.clear(); }
-  void add(const Vec3& p, double h, std::size_t i) {
-    x.push_back(p.x);
-    y.push_back(p.y);
-    z.push_back(p.z);
-    h2.push_back(h * h);
-    index.push_back(i);
+  // Empties the block and makes room for `capacity` candidates: add() does not check, so
+  // the callers that fill a block know how many candidates they can add at most.
+  void reset(std::size_t capacity) {
+    n_ = 0;
+    if (x.size() < capacity) {
+      for (auto* v : {&x, &y, &z, &h2, &r2}) v->resize(capacity);
+      index.resize(capacity);
+      hit.resize(capacity);
+    }
   }
-  std::size_t size() const { return index.size(); }
+  void add(const Vec3& p, double h2_value, std::size_t i) {
+    x[n_] = p.x;
+    y[n_] = p.y;
+    z[n_] = p.z;
+    h2[n_] = h2_value;
+    index[n_] = i;
+    ++n_;
+  }
+  // Adds the candidate when `keep`, without a branch (the filters that call this keep about
+  // half of what they see, in no pattern a branch predictor could learn).
+  void add_if(bool keep, const Vec3& p, double h2_value, std::size_t i) {
+    x[n_] = p.x;
+    y[n_] = p.y;
+    z[n_] = p.z;
+    h2[n_] = h2_value;
+    index[n_] = i;
+    n_ += keep ? 1 : 0;
+  }
+  std::size_t size() const { return n_; }
 
   // Squared distances from p to every candidate, in a loop the compiler can vectorise.
   void distances_to(const Vec3& p) {
     const std::size_t n = size();
-    r2.resize(n);
     const double* bx = x.data();
     const double* by = y.data();
     const double* bz = z.data();
@@ -46,7 +65,6 @@ struct NeighbourBlock {
   std::size_t within(const Vec3& p, double reach2, bool own_h_reaches) {
     distances_to(p);
     const std::size_t n = size();
-    hit.resize(n);
     std::size_t m = 0;
     for (std::size_t k = 0; k < n; ++k) {
       hit[m] = static_cast<std::uint32_t>(k);
@@ -54,6 +72,9 @@ struct NeighbourBlock {
     }
     return m;
   }
+
+ private:
+  std::size_t n_ = 0;
 };
 
 // Axis-aligned box of the active particles of a cell or of a group of particles.
@@ -92,17 +113,12 @@ struct ActiveBox {
 // box than its largest h (density: gather) or, when `own_h_reaches`, than their own h too (force).
 inline void select_near(const NeighbourBlock& block, const ActiveBox& box, bool own_h_reaches,
                         NeighbourBlock& near) {
-  near.clear();
+  near.reset(block.size());
   const double reach2 = box.h_max * box.h_max;
   for (std::size_t k = 0; k < block.size(); ++k) {
     const double d2 = box.distance2({block.x[k], block.y[k], block.z[k]});
-    if (d2 < reach2 || (own_h_reaches && d2 < block.h2[k])) {
-      near.x.push_back(block.x[k]);
-      near.y.push_back(block.y[k]);
-      near.z.push_back(block.z[k]);
-      near.h2.push_back(block.h2[k]);
-      near.index.push_back(block.index[k]);
-    }
+    near.add_if((d2 < reach2) | (own_h_reaches & (d2 < block.h2[k])), {block.x[k], block.y[k], block.z[k]}, block.h2[k],
+                block.index[k]);
   }
 }
 
