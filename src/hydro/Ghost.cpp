@@ -13,7 +13,7 @@ namespace fountain::hydro {
 namespace {
 
 // The first search radius for an unconverged h, in units of its current value.
-constexpr double kFirstReach = 1.5;
+constexpr double kFirstReach = 1.25;
 
 struct Candidate {
   Vec3 dx, dv;
@@ -37,8 +37,11 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
                           std::max(0.0, std::fabs(d.z) - 0.5 * b.width.z)};
     const double gap = std::sqrt(dot(out_of_box, out_of_box)) - b.dx_max;
     if (gap > 0.0 && gap * gap >= r2max) return;
+    // The image of particle i nearest the cell serves all of it (leaves are below a quarter
+    // of a periodic box); without a wrap the shift is exactly zero.
+    const Vec3 xi = gas.x[i] + (d - (gas.x[i] - b.centre()));
     for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-      const Vec3 dx = ctx.space.separation(gas.x[i], gas.x[j]);
+      const Vec3 dx = xi - gas.x[j];
       const double r2 = dot(dx, dx);
       if (r2 >= r2max) continue;
       const Vec3 dv = gas.v[i] - gas.v[j];
