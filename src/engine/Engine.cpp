@@ -314,6 +314,8 @@ void Engine::prepare_step(IntegerTime ti) {
   if (!rebuild_pending_) {
     for (int c : space_.leaves()) {
       const Cell& cell = space_.cell(c);
+      // A leaf without gas has no neighbours to cover (its cover is zero).
+      if (cell.count == 0) continue;
       const double dx = cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti));
       // Allow h to grow by 10% in the step before the cover runs out.
       if (1.1 * cell.h_max + dx + dx_bound > cell.r_cover) {

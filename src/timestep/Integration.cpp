@@ -76,7 +76,8 @@ void drift(StepContext& ctx, int c) {
   cell.dx_max += cell.v_max * std::fabs(dt);
   cell.ti_drift = ctx.ti_current;
   cell.h_max = h_max;
-  if (h_max + cell.dx_max + ctx.dx_bound > cell.r_cover) ctx.cover_exceeded = true;
+  // A leaf without gas has no neighbours to cover (its cover is zero).
+  if (cell.count > 0 && h_max + cell.dx_max + ctx.dx_bound > cell.r_cover) ctx.cover_exceeded = true;
 }
 
 void kick_close(StepContext& ctx, int c) {
