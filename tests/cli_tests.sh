@@ -190,6 +190,24 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     T_END=0.01 params good.hdf5 out3; "$bin" run params.yml -q -t 2 > /dev/null 2>&1 || fail "repeat run"
     "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 out2/snapshot_0001.hdf5
     "$python" "$root/tests/compare_snapshots.py" out2/snapshot_0001.hdf5 out3/snapshot_0001.hdf5 ;;
+  sigterm_stops_with_restart)
+    # SIGTERM: a restart file, then exit status 75 (EX_TEMPFAIL: "continue with --restart"),
+    # so scripts can tell a stopped run from a finished one; the restart then finishes it.
+    # (A restart file at every step keeps the run slow enough to be caught mid-way.)
+    T_END=0.03 params good.hdf5 out "restart:
+  every_steps: 1"
+    "$bin" run params.yml > run.txt 2>&1 &
+    pid=$!
+    n=0
+    until grep -qs '^step' run.txt || ! kill -0 "$pid" 2>/dev/null || [ $n -ge 600 ]; do sleep 0.05; n=$((n + 1)); done
+    kill -TERM "$pid" 2>/dev/null || true
+    set +e; wait "$pid"; status=$?; set -e
+    grep -q "stopped by SIGTERM" run.txt || { cat run.txt; fail "the run was not stopped by SIGTERM (status $status)"; }
+    [ "$status" -eq 75 ] || { cat run.txt; fail "exit status $status after SIGTERM, expected 75"; }
+    [ -f out/restart.hdf5 ] || fail "no restart file after SIGTERM"
+    "$bin" run params.yml -q --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart after SIGTERM"; }
+    grep -q "^done" restart.txt || { cat restart.txt; fail "the restarted run did not finish"; }
+    echo "ok: $(grep 'stopped by SIGTERM' run.txt)" ;;
   restart_after_kill)
     # The same run uninterrupted (A), and killed with SIGKILL then restarted (B), must end with
     # bitwise-identical snapshots. Both write restart files every 4 steps.

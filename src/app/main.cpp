@@ -71,7 +71,9 @@ int main(int argc, char** argv) {
     if (*run) {
       const ParameterFile params = ParameterFile::load(param_path);
       const RunSummary s = run_simulation(params, quiet, threads, restart);
-      if (s.terminated) return 0;
+      // Stopped by SIGTERM after writing a restart file: EX_TEMPFAIL, so that job scripts can
+      // tell a stopped run (continue it with --restart) from a finished one.
+      if (s.terminated) return 75;
       if (mpi.rank() == 0)
         fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
