@@ -71,4 +71,31 @@ inline PairGravity softened_pair(double r, double r2, double h,
   return out;
 }
 
+// softened_pair with every piece computed and the right one selected: the same arithmetic
+// operation by operation, so the same bits, but without branches, so that a loop over
+// targets calling it vectorises (the pieces not selected may be infinite; they are dropped).
+inline PairGravity softened_pair_branch_free(double r, double r2, double h, const GravitySplit& split = GravitySplit{}) {
+  const double r_inv = 1.0 / r;
+  const double newton_force = r_inv / r2, newton_potential = -r_inv;
+  const double h_inv = 1.0 / h;
+  const double h_inv3 = h_inv * h_inv * h_inv;
+  const double u = r * h_inv;
+  const double u2 = u * u;
+  const double inner_force = h_inv3 * (32.0 / 3.0 + u2 * (32.0 * u - 192.0 / 5.0));
+  const double inner_potential = h_inv * (-14.0 / 5.0 + u2 * (16.0 / 3.0 + u2 * (32.0 / 5.0 * u - 48.0 / 5.0)));
+  const double outer_force =
+      h_inv3 * (64.0 / 3.0 - 48.0 * u + 192.0 / 5.0 * u2 - 32.0 / 3.0 * u2 * u - 1.0 / (15.0 * u2 * u));
+  const double outer_potential =
+      h_inv * (-16.0 / 5.0 + 1.0 / (15.0 * u) + u2 * (32.0 / 3.0 + u * (-16.0 + u * (48.0 / 5.0 - 32.0 / 15.0 * u))));
+  const bool newtonian = r >= h, inner = u < 0.5;
+  PairGravity out;
+  out.force = newtonian ? newton_force : inner ? inner_force : outer_force;
+  out.potential = newtonian ? newton_potential : inner ? inner_potential : outer_potential;
+  if (split.enabled()) {
+    out.force *= split.force_factor(r);
+    out.potential *= split.potential_factor(r);
+  }
+  return out;
+}
+
 }  // namespace fountain::gravity

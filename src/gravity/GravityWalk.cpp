@@ -22,6 +22,7 @@ struct GravityTree::Group {
   double x[kGroupSize], y[kGroupSize], z[kGroupSize], eps[kGroupSize];
   double ax[kGroupSize], ay[kGroupSize], az[kGroupSize], pot[kGroupSize];
   std::int64_t self[kGroupSize];
+  double self_key[kGroupSize];  // self as a double (exact): compared in the vectorised near loop
   int own[kGroupSize];    // 1 if the target's own particle is on the near list (not an interaction)
   Vec3 centre, half;      // the box around the targets' positions
   double h_max = 0.0;     // the largest target spline length
@@ -162,27 +163,32 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
       g.pot[t] += gm * -r_inv;
     }
   }
+  // The near list is most of the work in a collapsed object (every particle within the
+  // softening is summed directly): the loop over targets is written without branches so it
+  // vectorises. A target's own particle and unsoftened coincident particles (no force
+  // direction) add exact zeros.
+  double owned[kGroupSize] = {};
   for (const std::int32_t k : list.near) {
     const Vec3& p = pos_[k];
     const double gm = G * mass_[k];
+    const double eps_k = eps_[k];
+    const double source_key = static_cast<double>(index_[k]);
     for (int t = 0; t < nt; ++t) {
-      if (index_[k] == g.self[t]) {
-        g.own[t] = 1;
-        continue;
-      }
+      const bool other = source_key != g.self_key[t];
+      owned[t] += other ? 0.0 : 1.0;
       const double dx = g.x[t] - p.x, dy = g.y[t] - p.y, dz = g.z[t] - p.z;
       const double r2 = dx * dx + dy * dy + dz * dz;
-      const double h = pair_spline_length(g.eps[t], eps_[k]);
-      // Unsoftened coincident particles have no force direction; they are left out.
-      if (r2 == 0.0 && h == 0.0) continue;
-      const PairGravity f = softened_pair(std::sqrt(r2), r2, h, config.split);
-      const double s = gm * f.force;
+      const double h = pair_spline_length(g.eps[t], eps_k);
+      const bool pull = other & ((r2 != 0.0) | (h != 0.0));
+      const PairGravity f = softened_pair_branch_free(std::sqrt(r2), r2, h, config.split);
+      const double s = pull ? gm * f.force : 0.0;
       g.ax[t] -= s * dx;
       g.ay[t] -= s * dy;
       g.az[t] -= s * dz;
-      g.pot[t] += gm * f.potential;
+      g.pot[t] += pull ? gm * f.potential : 0.0;
     }
   }
+  for (int t = 0; t < nt; ++t) g.own[t] = owned[t] > 0.0 ? 1 : 0;
 }
 
 GravityResult GravityTree::accelerate(const GravityTarget& target, const WalkConfig& config) const {
@@ -232,6 +238,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       g.z[t] = tg.position.z;
       g.eps[t] = tg.softening;
       g.self[t] = tg.source_index;
+      g.self_key[t] = static_cast<double>(tg.source_index);
       g.ax[t] = g.ay[t] = g.az[t] = g.pot[t] = 0.0;
       g.own[t] = 0;
       for (int d = 0; d < 3; ++d) {
