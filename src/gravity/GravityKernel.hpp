@@ -58,9 +58,11 @@ inline PairGravity softened_pair(double r, double r2, double h,
       out.force = h_inv3 * (32.0 / 3.0 + u2 * (32.0 * u - 192.0 / 5.0));
       out.potential = h_inv * (-14.0 / 5.0 + u2 * (16.0 / 3.0 + u2 * (32.0 / 5.0 * u - 48.0 / 5.0)));
     } else {
+      // 1/u = h/r: one division (shared with the Newtonian piece in the branch-free form).
+      const double u_inv = h * (1.0 / r);
       out.force = h_inv3 * (64.0 / 3.0 - 48.0 * u + 192.0 / 5.0 * u2 - 32.0 / 3.0 * u2 * u -
-                            1.0 / (15.0 * u2 * u));
-      out.potential = h_inv * (-16.0 / 5.0 + 1.0 / (15.0 * u) +
+                            1.0 / 15.0 * (u_inv * u_inv * u_inv));
+      out.potential = h_inv * (-16.0 / 5.0 + 1.0 / 15.0 * u_inv +
                                u2 * (32.0 / 3.0 + u * (-16.0 + u * (48.0 / 5.0 - 32.0 / 15.0 * u))));
     }
   }
@@ -83,10 +85,11 @@ inline PairGravity softened_pair_branch_free(double r, double r2, double h, cons
   const double u2 = u * u;
   const double inner_force = h_inv3 * (32.0 / 3.0 + u2 * (32.0 * u - 192.0 / 5.0));
   const double inner_potential = h_inv * (-14.0 / 5.0 + u2 * (16.0 / 3.0 + u2 * (32.0 / 5.0 * u - 48.0 / 5.0)));
+  const double u_inv = h * r_inv;
   const double outer_force =
-      h_inv3 * (64.0 / 3.0 - 48.0 * u + 192.0 / 5.0 * u2 - 32.0 / 3.0 * u2 * u - 1.0 / (15.0 * u2 * u));
+      h_inv3 * (64.0 / 3.0 - 48.0 * u + 192.0 / 5.0 * u2 - 32.0 / 3.0 * u2 * u - 1.0 / 15.0 * (u_inv * u_inv * u_inv));
   const double outer_potential =
-      h_inv * (-16.0 / 5.0 + 1.0 / (15.0 * u) + u2 * (32.0 / 3.0 + u * (-16.0 + u * (48.0 / 5.0 - 32.0 / 15.0 * u))));
+      h_inv * (-16.0 / 5.0 + 1.0 / 15.0 * u_inv + u2 * (32.0 / 3.0 + u * (-16.0 + u * (48.0 / 5.0 - 32.0 / 15.0 * u))));
   const bool newtonian = r >= h, inner = u < 0.5;
   PairGravity out;
   out.force = newtonian ? newton_force : inner ? inner_force : outer_force;
