@@ -31,11 +31,6 @@ struct Cell {
   std::int64_t ti_drift = 0;     // integer time its particles were drifted to
   std::int64_t ti_end_min = 0;   // earliest end of a particle's step in the cell (any species)
 
-  // Bounding box and largest h of the active particles, set by the first task of each loop
-  // on the cell so its pair tasks can skip neighbours out of reach.
-  Vec3 active_lo, active_hi;
-  double active_h_max = -1.0;  // negative: no active particle
-
   // Energy radiated by its particles' kicks this step (gathered by the engine after each step).
   double radiated = 0.0;
 
