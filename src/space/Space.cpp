@@ -88,6 +88,11 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
       const double volume = size_.x * size_.y * size_.z;
       w = std::cbrt(volume * 4.0 * config_.split_size / std::max<double>(1.0, static_cast<double>(std::max(n, n_dm))));
     }
+    // In a periodic box a cell wider than a quarter of the box's shortest side is split (see
+    // split()): top cells that start that narrow are not split for it, which would cut sparse
+    // regions (Sod's low-density half) into leaves of a few tens of particles with long
+    // neighbour lists.
+    if (config_.periodic) w = std::min(w, 0.25 * std::min({size_.x, size_.y, size_.z}));
     for (int k = 0; k < 3; ++k) ntop[k] = std::clamp(static_cast<int>(std::floor(size_[k] / w)), 1, 128);
   }
   ntop_ = ntop;
