@@ -1,5 +1,7 @@
 #include "engine/CellMessages.hpp"
 
+#include <type_traits>
+
 namespace fountain {
 
 static_assert(std::is_trivially_copyable_v<Cell>);
@@ -7,46 +9,40 @@ static_assert(std::is_trivially_copyable_v<starformation::FeedbackSite>);
 static_assert(std::is_trivially_copyable_v<starformation::StarFormationTally>);
 
 namespace {
-// Packs, or unpacks, the slice [first, first + count) of each field it is handed: all of it,
-// or only the particles flagged (when `flag`, indexed by particle, is given).
-struct PackFields {
-  MessageWriter& w;
+// Packs (Stream = MessageWriter), or unpacks (MessageReader), the slice [first, first + count)
+// of each field it is handed: all of it, or only the particles flagged (when `flag`, indexed by
+// particle, is given). One template, so the two directions cannot drift apart.
+template <class Stream>
+struct FieldSlices {
+  static constexpr bool kPack = std::is_same_v<Stream, MessageWriter>;
+  Stream& s;
   std::size_t first, count;
   std::span<const char> flag = {};
   const void* skip = nullptr;
   template <class T>
   void operator()(std::vector<T>& f) const {
     if (static_cast<const void*>(&f) == skip) return;
-    if (flag.empty()) return w.put(f.data() + first, count);
+    if (flag.empty()) {
+      if constexpr (kPack) s.put(f.data() + first, count);
+      else s.get(f.data() + first, count);
+      return;
+    }
     std::size_t n = 0;
     for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
-    char* out = w.grow(n * sizeof(T));
+    auto* bytes = [&] {
+      if constexpr (kPack) return s.grow(n * sizeof(T));
+      else return s.take(n * sizeof(T));
+    }();
     for (std::size_t i = first; i < first + count; ++i)
       if (flag[i]) {
-        std::memcpy(out, &f[i], sizeof(T));
-        out += sizeof(T);
+        if constexpr (kPack) std::memcpy(bytes, &f[i], sizeof(T));
+        else std::memcpy(&f[i], bytes, sizeof(T));
+        bytes += sizeof(T);
       }
   }
 };
-struct UnpackFields {
-  MessageReader& r;
-  std::size_t first, count;
-  std::span<const char> flag = {};
-  const void* skip = nullptr;
-  template <class T>
-  void operator()(std::vector<T>& f) const {
-    if (static_cast<const void*>(&f) == skip) return;
-    if (flag.empty()) return r.get(f.data() + first, count);
-    std::size_t n = 0;
-    for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
-    const char* in = r.take(n * sizeof(T));
-    for (std::size_t i = first; i < first + count; ++i)
-      if (flag[i]) {
-        std::memcpy(&f[i], in, sizeof(T));
-        in += sizeof(T);
-      }
-  }
-};
+using PackFields = FieldSlices<MessageWriter>;
+using UnpackFields = FieldSlices<MessageReader>;
 
 template <class F>
 void ghost_fields(GasParticles& g, F&& f) {
