@@ -13,6 +13,21 @@ cd "$tmp"
 
 fail() { echo "FAIL: $*"; exit 1; }
 
+# The rotating sphere's physics in the tests that run it (parameter-file lines), and its
+# star formation with multiphase feedback.
+sphere_physics="hydro:
+  msph: true
+gravity:
+  enabled: true
+  softening_dark_matter: 0.002
+cooling:
+  enabled: true"
+sphere_feedback="star_formation:
+  enabled: true
+feedback:
+  eps_cold: 0.4
+  eps_hot: 0.4"
+
 params() {  # params IC_FILE OUT_DIR [extra yaml]
   cat > params.yml <<EOT
 run:
@@ -117,18 +132,8 @@ domain:
   G: 1" ;;
       mpi_feedback_ranks)
         "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
-        T_END=6e-4 extra="star_formation:
-  enabled: true
-feedback:
-  eps_cold: 0.4
-  eps_hot: 0.4
-hydro:
-  msph: true
-gravity:
-  enabled: true
-  softening_dark_matter: 0.002
-cooling:
-  enabled: true" ;;
+        T_END=6e-4 extra="$sphere_feedback
+$sphere_physics" ;;
     esac
     write_params() {  # write_params OUT_DIR
       params ic.hdf5 "$1" "$extra"
@@ -240,11 +245,7 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     t_end=4e-4 extra="" kill_after='[1-9][0-9][0-9]+'
     if [ "$case_name" = restart_after_kill_star_formation ]; then
       t_end=6e-4 kill_after='1[0-9][0-9][0-9]'  # step 1000-1999: stars, reservoirs, promotions exist
-      extra="star_formation:
-  enabled: true
-feedback:
-  eps_cold: 0.4
-  eps_hot: 0.4"
+      extra="$sphere_feedback"
     fi
     gparams() {  # gparams OUT_DIR
       cat > params.yml <<EOT
@@ -259,13 +260,7 @@ output:
 time_integration:
   dt_max: 1e-5
   dt_min: 1e-14
-hydro:
-  msph: true
-gravity:
-  enabled: true
-  softening_dark_matter: 0.002
-cooling:
-  enabled: true
+$sphere_physics
 restart:
   every_steps: 25
 EOT
