@@ -21,8 +21,7 @@ struct GravityTree::Group {
   int n = 0;
   double x[kGroupSize], y[kGroupSize], z[kGroupSize], eps[kGroupSize];
   double ax[kGroupSize], ay[kGroupSize], az[kGroupSize], pot[kGroupSize];
-  std::int64_t self[kGroupSize];
-  double self_key[kGroupSize];  // self as a double (exact): compared in the vectorised near loop
+  double self[kGroupSize];  // the targets' source indices, as (exact) doubles for the vectorised near loop
   int own[kGroupSize];    // 1 if the target's own particle is on the near list (not an interaction)
   Vec3 centre, half;      // the box around the targets' positions
   double h_max = 0.0;     // the largest target spline length
@@ -174,7 +173,7 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
     const double eps_k = eps_[k];
     const double source_key = static_cast<double>(index_[k]);
     for (int t = 0; t < nt; ++t) {
-      const bool other = source_key != g.self_key[t];
+      const bool other = source_key != g.self[t];
       owned[t] += other ? 0.0 : 1.0;
       const double dx = g.x[t] - p.x, dy = g.y[t] - p.y, dz = g.z[t] - p.z;
       const double r2 = dx * dx + dy * dy + dz * dz;
@@ -237,8 +236,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       g.y[t] = tg.position.y;
       g.z[t] = tg.position.z;
       g.eps[t] = tg.softening;
-      g.self[t] = tg.source_index;
-      g.self_key[t] = static_cast<double>(tg.source_index);
+      g.self[t] = static_cast<double>(tg.source_index);
       g.ax[t] = g.ay[t] = g.az[t] = g.pot[t] = 0.0;
       g.own[t] = 0;
       for (int d = 0; d < 3; ++d) {

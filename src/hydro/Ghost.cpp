@@ -7,6 +7,7 @@
 #include "core/Error.hpp"
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
+#include "hydro/NeighbourBlock.hpp"
 
 namespace fountain::hydro {
 
@@ -31,15 +32,12 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
   const double r2max = radius * radius;
   auto scan = [&](int cj) {
     const Cell& b = ctx.space.cell(cj);
-    // Skip a neighbour cell whose particles, however far they drifted, are all out of reach.
-    const Vec3 d = ctx.space.separation(gas.x[i], b.centre());
-    const Vec3 out_of_box{std::max(0.0, std::fabs(d.x) - 0.5 * b.width.x), std::max(0.0, std::fabs(d.y) - 0.5 * b.width.y),
-                          std::max(0.0, std::fabs(d.z) - 0.5 * b.width.z)};
-    const double gap = std::sqrt(dot(out_of_box, out_of_box)) - b.dx_max;
-    if (gap > 0.0 && gap * gap >= r2max) return;
     // The image of particle i nearest the cell serves all of it (leaves are below a quarter
     // of a periodic box); without a wrap the shift is exactly zero.
-    const Vec3 xi = gas.x[i] + (d - (gas.x[i] - b.centre()));
+    const Vec3 xi = gas.x[i] + (ctx.space.separation(gas.x[i], b.centre()) - (gas.x[i] - b.centre()));
+    // Skip a neighbour cell whose particles, however far they drifted, are all out of reach.
+    const Vec3 margin{b.dx_max, b.dx_max, b.dx_max};
+    if (ActiveBox(b.lo - margin, b.lo + b.width + margin, 0.0).distance2(xi) >= r2max) return;
     for (std::size_t j = b.first; j < b.first + b.count; ++j) {
       const Vec3 dx = xi - gas.x[j];
       const double r2 = dot(dx, dx);
