@@ -30,7 +30,7 @@ DirectSums direct_summation(std::span<const Vec3> positions, std::span<const dou
       const double r2 = dot(dx, dx);
       const double h = pair_spline_length(softenings[i], softenings[j]);
       if (r2 == 0.0 && h == 0.0) continue;  // as in the tree walk
-      const PairGravity g = softened_pair(std::sqrt(r2), r2, h, split);
+      const PairGravity g = softened_pair(std::sqrt(r2), h, split);
       const Vec3 f = (G * g.force) * dx;
       acc_i -= masses[j] * f;
       out.acceleration[j] += masses[i] * f;
@@ -54,7 +54,7 @@ GravityResult direct_on_target(const GravityTarget& target, std::span<const Vec3
     const double r2 = dot(dx, dx);
     const double h = pair_spline_length(target.softening, softenings[j]);
     if (r2 == 0.0 && h == 0.0) continue;
-    const PairGravity g = softened_pair(std::sqrt(r2), r2, h, split);
+    const PairGravity g = softened_pair(std::sqrt(r2), h, split);
     out.acceleration -= (G * masses[j] * g.force) * dx;
     out.potential += G * masses[j] * g.potential;
     ++out.particle_interactions;

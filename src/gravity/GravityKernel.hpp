@@ -17,6 +17,14 @@ constexpr double pair_spline_length(double eps_i, double eps_j) {
   return spline_length(std::max(eps_i, eps_j));
 }
 
+// 1 / max(h_i, h_j) from the particles' 1 / h, bit for bit: rounded division is monotone,
+// so 1 / max(a, b) == min(1 / a, 1 / b) exactly. Loops that keep each particle's inverse
+// spline length then pay no division per pair for it.
+template <class Real>
+constexpr Real pair_inverse_spline_length(Real h_inv_i, Real h_inv_j) {
+  return std::min(h_inv_i, h_inv_j);
+}
+
 // The hook for a TreePM short-range force. Today it is the identity: the tree computes the
 // whole force. TreePM will multiply the softened pair force by
 // erfc(r / 2 r_s) + (r / r_s sqrt(pi)) exp(-r^2 / 4 r_s^2) and the potential by
@@ -40,14 +48,13 @@ struct PairGravity {
 
 // GADGET-2's piecewise polynomials (forcetree.c), written with the exact fractions whose
 // decimal forms GADGET-2 prints (32/3 for 10.666666666667 and so on), so the pieces join
-// to round-off at u = 1/2 and u = 1. `r2` is passed as well because callers have it and
-// the Newtonian branch, by far the most common, then needs one sqrt only.
-inline PairGravity softened_pair(double r, double r2, double h,
-                                 const GravitySplit& split = GravitySplit{}) {
+// to round-off at u = 1/2 and u = 1. The Newtonian piece is 1/r^3 as r_inv^3: divisions
+// and square roots are what the vectorised near loop waits on.
+inline PairGravity softened_pair(double r, double h, const GravitySplit& split = GravitySplit{}) {
   PairGravity out;
   if (r >= h) {
     const double r_inv = 1.0 / r;
-    out.force = r_inv / r2;
+    out.force = r_inv * r_inv * r_inv;
     out.potential = -r_inv;
   } else {
     const double h_inv = 1.0 / h;
@@ -73,31 +80,37 @@ inline PairGravity softened_pair(double r, double r2, double h,
   return out;
 }
 
-// softened_pair with every piece computed and the right one selected: the same arithmetic
-// operation by operation, so the same bits, but without branches, so that a loop over
-// targets calling it vectorises (the pieces not selected may be infinite; they are dropped).
-inline PairGravity softened_pair_branch_free(double r, double r2, double h, const GravitySplit& split = GravitySplit{}) {
-  const double r_inv = 1.0 / r;
-  const double newton_force = r_inv / r2, newton_potential = -r_inv;
-  const double h_inv = 1.0 / h;
-  const double h_inv3 = h_inv * h_inv * h_inv;
-  const double u = r * h_inv;
-  const double u2 = u * u;
-  const double inner_force = h_inv3 * (32.0 / 3.0 + u2 * (32.0 * u - 192.0 / 5.0));
-  const double inner_potential = h_inv * (-14.0 / 5.0 + u2 * (16.0 / 3.0 + u2 * (32.0 / 5.0 * u - 48.0 / 5.0)));
-  const double u_inv = h * r_inv;
-  const double outer_force =
-      h_inv3 * (64.0 / 3.0 - 48.0 * u + 192.0 / 5.0 * u2 - 32.0 / 3.0 * u2 * u - 1.0 / 15.0 * (u_inv * u_inv * u_inv));
-  const double outer_potential =
-      h_inv * (-16.0 / 5.0 + 1.0 / 15.0 * u_inv + u2 * (32.0 / 3.0 + u * (-16.0 + u * (48.0 / 5.0 - 32.0 / 15.0 * u))));
-  const bool newtonian = r >= h, inner = u < 0.5;
-  PairGravity out;
-  out.force = newtonian ? newton_force : inner ? inner_force : outer_force;
-  out.potential = newtonian ? newton_potential : inner ? inner_potential : outer_potential;
-  if (split.enabled()) {
-    out.force *= split.force_factor(r);
-    out.potential *= split.potential_factor(r);
-  }
+// softened_pair with every piece computed and the right one selected: in double, the same
+// arithmetic operation by operation, so the same bits, but without branches, so that a loop
+// over targets calling it vectorises (the pieces not selected may be infinite; they are
+// dropped). The tree's near loop runs it in float (twice the lanes; docs/gravity.md).
+// h_inv must be 1 / h exactly (pair_inverse_spline_length gives it without a division).
+template <class Real>
+struct PairGravityOf {
+  Real force, potential;
+};
+template <class Real>
+inline PairGravityOf<Real> softened_pair_branch_free(Real r, Real h, Real h_inv) {
+  const Real r_inv = Real(1) / r;
+  const Real newton_force = r_inv * r_inv * r_inv, newton_potential = -r_inv;
+  const Real h_inv3 = h_inv * h_inv * h_inv;
+  const Real u = r * h_inv;
+  const Real u2 = u * u;
+  const Real inner_force = h_inv3 * (Real(32.0 / 3.0) + u2 * (Real(32.0) * u - Real(192.0 / 5.0)));
+  const Real inner_potential =
+      h_inv * (Real(-14.0 / 5.0) + u2 * (Real(16.0 / 3.0) + u2 * (Real(32.0 / 5.0) * u - Real(48.0 / 5.0))));
+  const Real u_inv = h * r_inv;
+  const Real outer_force = h_inv3 * (Real(64.0 / 3.0) - Real(48.0) * u + Real(192.0 / 5.0) * u2 -
+                                     Real(32.0 / 3.0) * u2 * u - Real(1.0 / 15.0) * (u_inv * u_inv * u_inv));
+  const Real outer_potential =
+      h_inv * (Real(-16.0 / 5.0) + Real(1.0 / 15.0) * u_inv +
+               u2 * (Real(32.0 / 3.0) + u * (Real(-16.0) + u * (Real(48.0 / 5.0) - Real(32.0 / 15.0) * u))));
+  // One select per comparison (nested selects on two comparisons stop GCC vectorising).
+  const Real spline_force = u < Real(0.5) ? inner_force : outer_force;
+  const Real spline_potential = u < Real(0.5) ? inner_potential : outer_potential;
+  PairGravityOf<Real> out;
+  out.force = r >= h ? newton_force : spline_force;
+  out.potential = r >= h ? newton_potential : spline_potential;
   return out;
 }
 

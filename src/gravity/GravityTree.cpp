@@ -67,11 +67,15 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
 
   pos_.resize(n);
   mass_.resize(n);
-  eps_.resize(n);
+  spline_.resize(n);
+  spline_f_.resize(n);
+  spline_inv_f_.resize(n);
   for (std::int32_t k = 0; k < n; ++k) {
     pos_[k] = positions[index_[k]];
     mass_[k] = masses[index_[k]];
-    eps_[k] = softenings[index_[k]];
+    spline_[k] = spline_length(softenings[index_[k]]);
+    spline_f_[k] = static_cast<float>(spline_[k]);
+    spline_inv_f_[k] = 1.0f / spline_f_[k];
   }
 }
 

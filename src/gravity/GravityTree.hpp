@@ -101,7 +101,9 @@ class GravityTree {
   std::vector<std::int32_t> index_;  // tree order -> source index
   std::vector<Vec3> pos_;            // sources in tree order
   std::vector<double> mass_;
-  std::vector<double> eps_;
+  std::vector<double> spline_;     // the sources' spline lengths (2.8 eps)
+  std::vector<float> spline_f_;    // the same in float, for the near loop
+  std::vector<float> spline_inv_f_;  // 1 / spline_f_
 };
 
 }  // namespace fountain::gravity
