@@ -60,7 +60,7 @@ BENCHMARK(BM_ForceInteraction);
 // disc of scale length 3 and height 0.3, softenings 1 and 0.5, G = 1, total mass 1. The
 // targets are the disc's particles, passed 128 at a time in order of x (as cells pass their
 // active particles), with |a_old| from a first Barnes-Hut pass: the relative criterion at
-// alpha_force = 0.01, as in the runs. Items are targets.
+// alpha_force = 0.01, as in the runs. Items are targets; the argument is the tree's leaf size.
 void BM_GravityCollapsedDisc(benchmark::State& state) {
   constexpr int n = 8000;
   std::mt19937_64 rng(7);
@@ -83,7 +83,9 @@ void BM_GravityCollapsedDisc(benchmark::State& state) {
     targets.push_back({pos.back(), 0.5, gravity::kNoOldAcceleration, n + i});
   }
   std::sort(targets.begin(), targets.end(), [](const auto& a, const auto& b) { return a.position.x < b.position.x; });
-  const gravity::GravityTree tree(pos, mass, eps);
+  gravity::TreeConfig tree_config;
+  tree_config.max_leaf_size = static_cast<int>(state.range(0));
+  const gravity::GravityTree tree(pos, mass, eps, tree_config);
   gravity::WalkConfig config;
   std::vector<gravity::GravityResult> results(targets.size());
   auto walk_all = [&] {
@@ -103,7 +105,7 @@ void BM_GravityCollapsedDisc(benchmark::State& state) {
   state.counters["particles_per_target"] = near / static_cast<double>(results.size());
   state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(targets.size()));
 }
-BENCHMARK(BM_GravityCollapsedDisc)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GravityCollapsedDisc)->Arg(4)->Arg(8)->Arg(16)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -118,7 +118,6 @@ void Engine::rebuild() {
       end = std::min(end, step_end(dm_.time_bin[i], dm_.ti_begin[i]));
     cell.ti_end_min = end;
   }
-  ctx_->dx_bound = 0.0;
   ctx_->cover_exceeded = false;
   build_graph();
   rebuild_pending_ = false;
@@ -305,30 +304,35 @@ std::size_t Engine::activate(Phase phase) {
 void Engine::prepare_step(IntegerTime ti) {
   ti_current_ = ti;
   ctx_->ti_current = ti;
-  // How far particles will have moved since the rebuild once drifted to ti.
-  double dx_bound = 0.0;
-  for (int c : space_.leaves()) {
+  // How far each leaf's particles will have moved since the rebuild once drifted to ti.
+  const auto& leaves = space_.leaves();
+  moved_.resize(space_.cells().size());
+  double moved_most = 0.0;
+  for (int c : leaves) {
     const Cell& cell = space_.cell(c);
-    dx_bound = std::max(dx_bound, cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti)));
+    moved_[static_cast<std::size_t>(c)] = cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti));
+    moved_most = std::max(moved_most, moved_[static_cast<std::size_t>(c)]);
   }
-  if (!rebuild_pending_) {
-    for (int c : space_.leaves()) {
-      const Cell& cell = space_.cell(c);
-      // A leaf without gas has no neighbours to cover (its cover is zero).
-      if (cell.count == 0) continue;
-      const double dx = cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti));
-      // Allow h to grow by 10% in the step before the cover runs out.
-      if (1.1 * cell.h_max + dx + dx_bound > cell.r_cover) {
-        rebuild_pending_ = true;
-        break;
-      }
+  // A gas particle of leaf a misses no neighbour while h + dx_a + dx_b stays within the gap
+  // to every leaf b off its list (that gap is at least a's cover). Leaves beyond a's
+  // surroundings are at least twice the cover away: while the fastest motion anywhere fits
+  // in that, only the surroundings' motion counts (the cover of a dense clump is no longer
+  // spent by fast gas elsewhere).
+  for (int c : leaves) {
+    Cell& cell = space_.cell(c);
+    // A leaf without gas has no neighbours to cover (its cover is zero).
+    if (cell.count == 0) continue;
+    const double dx = moved_[static_cast<std::size_t>(c)];
+    double around = moved_most;
+    if (1.1 * cell.h_max + dx + moved_most <= Space::surroundings_reach(cell)) {
+      around = 0.0;
+      for (int b : space_.surroundings(c)) around = std::max(around, moved_[static_cast<std::size_t>(b)]);
     }
+    cell.dx_around = around;
+    // Allow h to grow by 10% in the step before the cover runs out.
+    if (1.1 * cell.h_max + dx + around > cell.r_cover) rebuild_pending_ = true;
   }
-  if (rebuild_pending_) {
-    rebuild();
-  } else {
-    ctx_->dx_bound = dx_bound;
-  }
+  if (rebuild_pending_) rebuild();
 }
 
 void Engine::run_graph(StepInfo* info) {

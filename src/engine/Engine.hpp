@@ -174,6 +174,7 @@ class Engine {
   tasks::TaskGraph records_graph_;  // the graph of records_ once graph_ was rebuilt
   bool records_stale_ = false;
   std::vector<char> cell_active_;
+  std::vector<double> moved_;  // per cell: how far its particles moved since the rebuild (prepare_step)
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
   int gravity_tree_task_ = -1;

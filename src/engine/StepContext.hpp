@@ -39,7 +39,6 @@ struct StepContext {
   std::unique_ptr<gravity::GravityTree> tree;
 
   IntegerTime ti_current = 0;
-  double dx_bound = 0.0;    // largest distance any particle moved since the rebuild
 
   // Set by tasks, read by the engine after the step.
   std::atomic<bool> cover_exceeded{false};  // some h outgrew its cell's cover: rebuild

@@ -66,7 +66,7 @@ void ghost(StepContext& ctx, int ci) {
   Cell& cell = ctx.space.cell(ci);
   const HydroParams& p = ctx.hydro;
   // Neighbours are complete within this radius of any particle of the cell.
-  double h_limit = cell.r_cover - cell.dx_max - ctx.dx_bound;
+  double h_limit = cell.r_cover - cell.dx_max - cell.dx_around;
   const bool limit_is_cover = !(p.h_max > 0.0 && p.h_max < h_limit);
   if (!limit_is_cover) h_limit = p.h_max;
   thread_local std::vector<Candidate> cand;

@@ -28,6 +28,9 @@ struct Cell {
   double h_max = 0.0;            // largest h of its particles, after the last drift or ghost
   double v_max = 0.0;            // largest |v_full|, after the last kick
   double dx_max = 0.0;           // bound on how far a particle moved since the rebuild
+  // Bound on how far a particle of any other leaf that could come within reach moved since
+  // the rebuild (Engine::prepare_step): the cover must outlast h growth, dx_max and this.
+  double dx_around = 0.0;
   std::int64_t ti_drift = 0;     // integer time its particles were drifted to
   std::int64_t ti_end_min = 0;   // earliest end of a particle's step in the cell (any species)
 

@@ -148,6 +148,7 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
   for (int c = static_cast<int>(cells_.size()) - 1; c >= 0; --c) {
     Cell& cell = cells_[static_cast<std::size_t>(c)];
     cell.dx_max = 0.0;
+    cell.dx_around = 0.0;
     if (cell.leaf) {
       cell.h_max = 0.0;
       cell.v_max = 0.0;
@@ -192,9 +193,13 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
   }
 
   neighbours_.assign(leaves_.size(), {});
+  surroundings_.assign(leaves_.size(), {});
   for (std::size_t l = 0; l < leaves_.size(); ++l)
     if (cells_[static_cast<std::size_t>(leaves_[l])].count > 0)
-      for (int t : top_) collect_neighbours(leaves_[l], t, neighbours_[l]);
+      for (int t : top_) {
+        collect_neighbours(leaves_[l], t, neighbours_[l]);
+        collect_surroundings(leaves_[l], t, surroundings_[l]);
+      }
 }
 
 namespace {
@@ -315,6 +320,19 @@ void Space::collect_neighbours(int leaf, int node, std::vector<int>& out) const 
   }
   for (int ch : b.children)
     if (ch >= 0) collect_neighbours(leaf, ch, out);
+}
+
+void Space::collect_surroundings(int leaf, int node, std::vector<int>& out) const {
+  const Cell& a = cells_[static_cast<std::size_t>(leaf)];
+  const Cell& b = cells_[static_cast<std::size_t>(node)];
+  if (b.count == 0) return;
+  if (box_distance(a, b) >= surroundings_reach(a)) return;
+  if (b.leaf) {
+    if (node != leaf) out.push_back(node);
+    return;
+  }
+  for (int ch : b.children)
+    if (ch >= 0) collect_surroundings(leaf, ch, out);
 }
 
 }  // namespace fountain

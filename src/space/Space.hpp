@@ -34,6 +34,11 @@ class Space {
   // Leaves hold gas, dark matter or both; the hydro tasks skip those without gas.
   // Leaves whose gas particles may interact with those of leaf `c` (not `c` itself), in a fixed order.
   const std::vector<int>& neighbours(int c) const { return neighbours_[static_cast<std::size_t>(leaf_slot_[static_cast<std::size_t>(c)])]; }
+  // Leaves with gas whose boxes lie within surroundings_reach(c) of leaf `c`'s (not `c`
+  // itself): the only ones whose motion can bring a particle within its cover before any
+  // particle has moved half that far (Engine::prepare_step).
+  const std::vector<int>& surroundings(int c) const { return surroundings_[static_cast<std::size_t>(leaf_slot_[static_cast<std::size_t>(c)])]; }
+  static double surroundings_reach(const Cell& c) { return 2.0 * c.r_cover; }
   // The separation a - b of two positions, as its nearest periodic image.
   Vec3 separation(const Vec3& a, const Vec3& b) const {
     Vec3 d = a - b;
@@ -69,6 +74,7 @@ class Space {
   struct SortState;
   void split(int c, SortState& s);
   void collect_neighbours(int leaf, int node, std::vector<int>& out) const;
+  void collect_surroundings(int leaf, int node, std::vector<int>& out) const;
   double wrap_delta(double d, int dim) const;
 
   SpaceConfig config_;
@@ -79,6 +85,7 @@ class Space {
   std::vector<int> leaves_;
   std::vector<int> leaf_slot_;
   std::vector<std::vector<int>> neighbours_;
+  std::vector<std::vector<int>> surroundings_;
   int rebuilds_ = 0;
 };
 

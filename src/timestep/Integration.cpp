@@ -77,7 +77,7 @@ void drift(StepContext& ctx, int c) {
   cell.ti_drift = ctx.ti_current;
   cell.h_max = h_max;
   // A leaf without gas has no neighbours to cover (its cover is zero).
-  if (cell.count > 0 && h_max + cell.dx_max + ctx.dx_bound > cell.r_cover) ctx.cover_exceeded = true;
+  if (cell.count > 0 && h_max + cell.dx_max + cell.dx_around > cell.r_cover) ctx.cover_exceeded = true;
 }
 
 void kick_close(StepContext& ctx, int c) {
