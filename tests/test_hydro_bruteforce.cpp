@@ -1,6 +1,7 @@
 // The task loops (density, ghost, force) against direct O(N^2) sums, MSPH on and off.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -155,6 +156,60 @@ TEST(CellCover, GasFreeLeavesDoNotForceRebuilds) {
   // The gas moves ~0.5 per unit time against h ~ 0.1 with a skin of 0.25 h: a rebuild every
   // few steps at most, never at every one.
   EXPECT_LT(rebuilt, steps / 2) << rebuilt << " of " << steps << " steps rebuilt";
+}
+
+// A leaf's surroundings are exactly the other leaves with gas whose boxes lie within twice
+// its cover: the rebuild check relies on every other leaf being at least that far.
+TEST(CellCover, SurroundingsAreTheLeavesWithinTwiceTheCover) {
+  std::mt19937_64 rng(3);
+  GasParticles g;
+  test::add_random(g, 1200, {0, 0, 0}, {1, 1, 1}, 1.0 / 1500, 1.0, 1.0, rng);
+  test::add_random(g, 600, {0.6, 0.1, 0.2}, {0.1, 0.1, 0.1}, 1.0 / 1500, 1.0, 1.0, rng);
+  Engine engine(test::test_config(true, {1, 1, 1}, false), g);
+  engine.initialise();
+  const Space& space = engine.space();
+  std::size_t listed = 0;
+  for (int a : space.leaves()) {
+    if (space.cell(a).count == 0) continue;
+    const auto& around = space.surroundings(a);
+    for (int b : space.leaves()) {
+      if (b == a || space.cell(b).count == 0) continue;
+      const bool within = space.box_distance(space.cell(a), space.cell(b)) < Space::surroundings_reach(space.cell(a));
+      const bool in_list = std::find(around.begin(), around.end(), b) != around.end();
+      EXPECT_EQ(within, in_list) << "leaves " << a << " and " << b;
+    }
+    listed += around.size();
+  }
+  EXPECT_GT(listed, 0u);
+}
+
+// Between rebuilds the loops must still find every neighbour: after each step that did not
+// rebuild, the densities of the particles active in it match direct sums over all particles.
+TEST(CellCover, NeighboursStayCompleteBetweenRebuilds) {
+  std::mt19937_64 rng(17);
+  GasParticles g;
+  test::add_random(g, 1000, {0, 0, 0}, {1, 1, 1}, 1.0 / 1500, 0.02, 6.0, rng);      // sparse and fast
+  test::add_random(g, 500, {0.3, 0.3, 0.3}, {0.15, 0.15, 0.15}, 1.0 / 1500, 0.05, 0.0, rng);  // dense, at rest
+  const RunConfig cfg = test::test_config(true, {1, 1, 1}, false);
+  Engine engine(cfg, g);
+  engine.initialise();
+  int quiet_steps = 0;
+  std::size_t checked = 0;
+  for (int step = 0; step < 40 && !::testing::Test::HasFailure(); ++step) {
+    if (engine.step().rebuilt) continue;
+    ++quiet_steps;
+    engine.drift_all();  // the positions the loops saw, for the direct sums
+    const GasParticles& gas = engine.gas();
+    const test::BruteForce bf{gas, cfg.hydro, true, {1, 1, 1}};
+    for (std::size_t i = 0; i < gas.size(); ++i) {
+      if (gas.ti_begin[i] != engine.ti_current()) continue;  // not active in this step
+      ++checked;
+      expect_close(gas.rho[i], bf.density(i, gas.h[i]).rho, 0.0, "density", gas.id[i]);
+      if (::testing::Test::HasFailure()) break;
+    }
+  }
+  EXPECT_GT(quiet_steps, 5);
+  EXPECT_GT(checked, 500u);
 }
 
 }  // namespace
