@@ -59,9 +59,11 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
   side = side > 0.0 ? side * (1.0 + 1e-9) : 1.0;
   const Vec3 centre = 0.5 * (lo + hi);
 
-  std::vector<std::int32_t> scratch(n);
+  // Partitioned with their positions beside their indices, so no pass reads through an index.
+  std::vector<SortItem> items(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
+  for (std::int32_t i = 0; i < n; ++i) items[static_cast<std::size_t>(i)] = {positions[i], i};
   nodes_.reserve(2 * static_cast<std::size_t>(n) / config_.max_leaf_size + 16);
-  build(0, n, centre, side, 0, scratch, positions, masses, softenings);
+  build(0, n, centre, side, 0, items, scratch);
   for (TreeNode& node : nodes_)
     if (node.next == static_cast<std::int32_t>(nodes_.size())) node.next = -1;
 
@@ -70,61 +72,42 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
   spline_.resize(n);
   spline_f_.resize(n);
   spline_inv_f_.resize(n);
+  std::vector<double> eps(static_cast<std::size_t>(n));
   for (std::int32_t k = 0; k < n; ++k) {
+    index_[k] = items[static_cast<std::size_t>(k)].index;
     pos_[k] = positions[index_[k]];
     mass_[k] = masses[index_[k]];
-    spline_[k] = spline_length(softenings[index_[k]]);
+    eps[static_cast<std::size_t>(k)] = softenings[index_[k]];
+    spline_[k] = spline_length(eps[static_cast<std::size_t>(k)]);
     spline_f_[k] = static_cast<float>(spline_[k]);
     spline_inv_f_[k] = 1.0f / spline_f_[k];
   }
+  compute_moments(eps);
 }
 
-// Sequential depth-first build: nodes come out in preorder, so a node's first child is the
-// next node and its subtree ends where `next` points. Partitions are stable counting sorts,
-// so the tree depends only on the input order.
+// Sequential depth-first build of the topology: nodes come out in preorder, so a node's first
+// child is the next node and its subtree ends where `next` points. Partitions are stable
+// counting sorts, so the tree depends only on the input order.
 void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& centre, double side, int depth,
-                        std::vector<std::int32_t>& scratch, std::span<const Vec3> positions,
-                        std::span<const double> masses, std::span<const double> softenings) {
+                        std::vector<SortItem>& items, std::vector<SortItem>& scratch) {
   const auto self = static_cast<std::int32_t>(nodes_.size());
   TreeNode node;
   node.centre = centre;
   node.side = side;
   node.first = first;
   node.count = count;
-
-  Vec3 weighted;
-  for (std::int32_t k = first; k < first + count; ++k) {
-    const std::int32_t i = index_[k];
-    node.mass += masses[i];
-    weighted += masses[i] * positions[i];
-    node.max_softening = std::max(node.max_softening, softenings[i]);
-  }
-  // A massless node still needs a finite position for the distance tests.
-  node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : centre;
-  auto& q = node.quadrupole;
-  for (std::int32_t k = first; k < first + count; ++k) {
-    const std::int32_t i = index_[k];
-    const Vec3 s = positions[i] - node.com;
-    const double m = masses[i], s2 = dot(s, s);
-    q[0] += m * (3.0 * s.x * s.x - s2);
-    q[1] += m * (3.0 * s.y * s.y - s2);
-    q[2] += m * (3.0 * s.z * s.z - s2);
-    q[3] += m * 3.0 * s.x * s.y;
-    q[4] += m * 3.0 * s.x * s.z;
-    q[5] += m * 3.0 * s.y * s.z;
-  }
   nodes_.push_back(node);
 
   if (count > config_.max_leaf_size && depth < kMaxDepth) {
     std::array<std::int32_t, 9> start{};
-    for (std::int32_t k = first; k < first + count; ++k) ++start[octant(positions[index_[k]], centre) + 1];
+    for (std::int32_t k = first; k < first + count; ++k) ++start[octant(items[k].x, centre) + 1];
     for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
     std::array<std::int32_t, 8> fill{};
     for (std::int32_t k = first; k < first + count; ++k) {
-      const int o = octant(positions[index_[k]], centre);
-      scratch[first + start[o] + fill[o]++] = index_[k];
+      const int o = octant(items[k].x, centre);
+      scratch[first + start[o] + fill[o]++] = items[k];
     }
-    std::copy(scratch.begin() + first, scratch.begin() + first + count, index_.begin() + first);
+    std::copy(scratch.begin() + first, scratch.begin() + first + count, items.begin() + first);
 
     nodes_[self].first_child = self + 1;
     const double child_side = 0.5 * side;
@@ -134,11 +117,60 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
       const Vec3 child_centre{centre.x + ((o & 1) ? 0.25 : -0.25) * side,
                               centre.y + ((o & 2) ? 0.25 : -0.25) * side,
                               centre.z + ((o & 4) ? 0.25 : -0.25) * side};
-      build(first + start[o], child_count, child_centre, child_side, depth + 1, scratch, positions, masses,
-            softenings);
+      build(first + start[o], child_count, child_centre, child_side, depth + 1, items, scratch);
     }
   }
   nodes_[self].next = static_cast<std::int32_t>(nodes_.size());
+}
+
+// Moments from the leaves up (children follow their parent in preorder, so a reverse pass
+// meets every child first): a leaf sums its particles, a parent combines its children's
+// moments about its own centre of mass (the parallel-axis shift of each child's quadrupole).
+// One pass over the particles in all, instead of one per level.
+void GravityTree::compute_moments(const std::vector<double>& eps) {
+  for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n) {
+    TreeNode& node = nodes_[n];
+    auto& q = node.quadrupole;
+    Vec3 weighted;
+    if (node.first_child < 0) {
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        node.mass += mass_[k];
+        weighted += mass_[k] * pos_[k];
+        node.max_softening = std::max(node.max_softening, eps[static_cast<std::size_t>(k)]);
+      }
+      // A massless node still needs a finite position for the distance tests.
+      node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        const Vec3 d = pos_[k] - node.com;
+        const double m = mass_[k], d2 = dot(d, d);
+        q[0] += m * (3.0 * d.x * d.x - d2);
+        q[1] += m * (3.0 * d.y * d.y - d2);
+        q[2] += m * (3.0 * d.z * d.z - d2);
+        q[3] += m * 3.0 * d.x * d.y;
+        q[4] += m * 3.0 * d.x * d.z;
+        q[5] += m * 3.0 * d.y * d.z;
+      }
+      continue;
+    }
+    const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
+    for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
+      node.mass += nodes_[c].mass;
+      weighted += nodes_[c].mass * nodes_[c].com;
+      node.max_softening = std::max(node.max_softening, nodes_[c].max_softening);
+    }
+    node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
+    for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
+      const TreeNode& child = nodes_[c];
+      const Vec3 d = child.com - node.com;
+      const double m = child.mass, d2 = dot(d, d);
+      q[0] += child.quadrupole[0] + m * (3.0 * d.x * d.x - d2);
+      q[1] += child.quadrupole[1] + m * (3.0 * d.y * d.y - d2);
+      q[2] += child.quadrupole[2] + m * (3.0 * d.z * d.z - d2);
+      q[3] += child.quadrupole[3] + m * 3.0 * d.x * d.y;
+      q[4] += child.quadrupole[4] + m * 3.0 * d.x * d.z;
+      q[5] += child.quadrupole[5] + m * 3.0 * d.y * d.z;
+    }
+  }
 }
 
 }  // namespace fountain::gravity

@@ -87,9 +87,13 @@ class GravityTree {
   const TreeConfig& config() const { return config_; }
 
  private:
+  struct SortItem {
+    Vec3 x;
+    std::int32_t index;
+  };
   void build(std::int32_t first, std::int32_t count, const Vec3& centre, double side, int depth,
-             std::vector<std::int32_t>& scratch, std::span<const Vec3> positions,
-             std::span<const double> masses, std::span<const double> softenings);
+             std::vector<SortItem>& items, std::vector<SortItem>& scratch);
+  void compute_moments(const std::vector<double>& eps);
 
   struct Group;
   struct InteractionList;
