@@ -48,18 +48,18 @@ struct WalkConfig {
 };
 
 // One node. The traceless quadrupole is Q = sum m (3 s s^T - |s|^2 I) with s = x - com, stored
-// as xx, yy, zz, xy, xz, yz.
+// as xx, yy, zz, xy, xz, yz. The fields the walk reads come first, together (88 bytes).
 struct TreeNode {
   Vec3 centre;  // geometric centre of the cube
   double side = 0.0;
   Vec3 com;
   double mass = 0.0;
-  std::array<double, 6> quadrupole{};
   double max_softening = 0.0;  // largest Plummer-equivalent eps of the particles inside
   std::int32_t first = 0;      // the node's particles are [first, first + count) in tree order
   std::int32_t count = 0;
   std::int32_t first_child = -1;  // -1 for a leaf; otherwise the next node in the array
   std::int32_t next = -1;         // node to visit after this one's subtree; -1 ends the walk
+  std::array<double, 6> quadrupole{};
 };
 
 // Built once from the sources (copied, in tree order), then read-only: any number of walks
