@@ -74,6 +74,28 @@ TEST(GravityKernel, PairSofteningIsTheLargerAndSymmetric) {
   EXPECT_EQ(a.potential, b.potential);
 }
 
+TEST(GravityKernel, BranchFreeFormIsTheKernel) {
+  // In double, bit for bit softened_pair on every piece, with 1/h from the particles' own
+  // inverses (min of the inverses is the inverse of the max). In float (the tree's near loop)
+  // within 1e-5: the outer piece's terms cancel to ~1/40 of their size near u = 1, which
+  // multiplies float's 6e-8 rounding to a few 1e-6 there.
+  for (const auto& [eps_i, eps_j] : {std::pair{0.2, 0.35}, std::pair{0.35, 0.2}, std::pair{0.1, 0.1}}) {
+    const double h = pair_spline_length(eps_i, eps_j);
+    const double h_inv = pair_inverse_spline_length(1.0 / spline_length(eps_i), 1.0 / spline_length(eps_j));
+    EXPECT_EQ(h_inv, 1.0 / h);
+    for (double u : {0.0, 0.01, 0.3, 0.4999, 0.5, 0.77, 0.9999, 1.0, 1.5, 40.0}) {
+      const double r = u * h;
+      const PairGravity a = softened_pair(r, h);
+      const PairGravityOf<double> b = softened_pair_branch_free(r, h, h_inv);
+      EXPECT_EQ(a.force, b.force) << "u = " << u;
+      EXPECT_EQ(a.potential, b.potential) << "u = " << u;
+      const auto c = softened_pair_branch_free(static_cast<float>(r), static_cast<float>(h), 1.0f / static_cast<float>(h));
+      EXPECT_NEAR(c.force, a.force, 1e-5 * std::fabs(a.force)) << "u = " << u;
+      EXPECT_NEAR(c.potential, a.potential, 1e-5 * std::fabs(a.potential)) << "u = " << u;
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------
 // Particle sets, generated with our own transforms of mt19937_64 (whose output the standard
 // fixes) so every platform gets the same particles.

@@ -15,6 +15,17 @@ namespace {
 // recursion instead of looping forever.
 constexpr int kMaxDepth = 48;
 
+// The traceless quadrupole of a point mass m at offset d: m (3 d d^T - |d|^2 I).
+void add_point_quadrupole(std::array<double, 6>& q, double m, const Vec3& d) {
+  const double d2 = dot(d, d);
+  q[0] += m * (3.0 * d.x * d.x - d2);
+  q[1] += m * (3.0 * d.y * d.y - d2);
+  q[2] += m * (3.0 * d.z * d.z - d2);
+  q[3] += m * 3.0 * d.x * d.y;
+  q[4] += m * 3.0 * d.x * d.z;
+  q[5] += m * 3.0 * d.y * d.z;
+}
+
 int octant(const Vec3& x, const Vec3& centre) {
   return (x.x >= centre.x ? 1 : 0) | (x.y >= centre.y ? 2 : 0) | (x.z >= centre.z ? 4 : 0);
 }
@@ -45,7 +56,6 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
   check_inputs(positions, masses, softenings, config);
   const auto n = static_cast<std::int32_t>(positions.size());
   index_.resize(n);
-  for (std::int32_t i = 0; i < n; ++i) index_[i] = i;
   if (n == 0) return;
 
   Vec3 lo = positions[0], hi = positions[0];
@@ -140,16 +150,7 @@ void GravityTree::compute_moments(const std::vector<double>& eps) {
       }
       // A massless node still needs a finite position for the distance tests.
       node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        const Vec3 d = pos_[k] - node.com;
-        const double m = mass_[k], d2 = dot(d, d);
-        q[0] += m * (3.0 * d.x * d.x - d2);
-        q[1] += m * (3.0 * d.y * d.y - d2);
-        q[2] += m * (3.0 * d.z * d.z - d2);
-        q[3] += m * 3.0 * d.x * d.y;
-        q[4] += m * 3.0 * d.x * d.z;
-        q[5] += m * 3.0 * d.y * d.z;
-      }
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
       continue;
     }
     const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
@@ -161,14 +162,8 @@ void GravityTree::compute_moments(const std::vector<double>& eps) {
     node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
     for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
       const TreeNode& child = nodes_[c];
-      const Vec3 d = child.com - node.com;
-      const double m = child.mass, d2 = dot(d, d);
-      q[0] += child.quadrupole[0] + m * (3.0 * d.x * d.x - d2);
-      q[1] += child.quadrupole[1] + m * (3.0 * d.y * d.y - d2);
-      q[2] += child.quadrupole[2] + m * (3.0 * d.z * d.z - d2);
-      q[3] += child.quadrupole[3] + m * 3.0 * d.x * d.y;
-      q[4] += child.quadrupole[4] + m * 3.0 * d.x * d.z;
-      q[5] += child.quadrupole[5] + m * 3.0 * d.y * d.z;
+      for (int m = 0; m < 6; ++m) q[m] += child.quadrupole[m];
+      add_point_quadrupole(q, child.mass, child.com - node.com);
     }
   }
 }

@@ -176,7 +176,7 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
   // softening is summed directly). Its loop is branch-free and in float, over 8 or 16 lanes
   // (padded), so it vectorises with twice the lanes of double: positions relative to the
   // group's centre (within a few spline lengths, so float keeps ~1e-7 of the separation), sums
-  // in float and then added to the double totals. Force errors stay ~1e-6, far below the
+  // in float and then added to the double totals. Pair errors stay below 1e-5, far below the
   // walk's ~1e-3 (docs/gravity.md). A target's own particle and unsoftened coincident
   // particles (no force direction) add exact zeros.
   {
