@@ -197,8 +197,8 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
   for (std::size_t l = 0; l < leaves_.size(); ++l)
     if (cells_[static_cast<std::size_t>(leaves_[l])].count > 0)
       for (int t : top_) {
-        collect_neighbours(leaves_[l], t, neighbours_[l]);
-        collect_surroundings(leaves_[l], t, surroundings_[l]);
+        collect_leaves(leaves_[l], t, Reach::cover, neighbours_[l]);
+        collect_leaves(leaves_[l], t, Reach::surroundings, surroundings_[l]);
       }
 }
 
@@ -309,30 +309,21 @@ int Space::cell_at(const Vec3& x) const {
   }
 }
 
-void Space::collect_neighbours(int leaf, int node, std::vector<int>& out) const {
+// Leaves with gas below `node` whose boxes lie within reach of leaf `leaf`'s: its neighbours
+// (reach: the larger cover radius of the two; an inner node's cover bounds its leaves') or
+// its surroundings (reach: surroundings_reach of the leaf).
+void Space::collect_leaves(int leaf, int node, Reach reach, std::vector<int>& out) const {
   const Cell& a = cells_[static_cast<std::size_t>(leaf)];
   const Cell& b = cells_[static_cast<std::size_t>(node)];
   if (b.count == 0) return;
-  if (box_distance(a, b) >= std::max(a.r_cover, b.r_cover)) return;
+  const double r = reach == Reach::cover ? std::max(a.r_cover, b.r_cover) : surroundings_reach(a);
+  if (box_distance(a, b) >= r) return;
   if (b.leaf) {
     if (node != leaf) out.push_back(node);
     return;
   }
   for (int ch : b.children)
-    if (ch >= 0) collect_neighbours(leaf, ch, out);
-}
-
-void Space::collect_surroundings(int leaf, int node, std::vector<int>& out) const {
-  const Cell& a = cells_[static_cast<std::size_t>(leaf)];
-  const Cell& b = cells_[static_cast<std::size_t>(node)];
-  if (b.count == 0) return;
-  if (box_distance(a, b) >= surroundings_reach(a)) return;
-  if (b.leaf) {
-    if (node != leaf) out.push_back(node);
-    return;
-  }
-  for (int ch : b.children)
-    if (ch >= 0) collect_surroundings(leaf, ch, out);
+    if (ch >= 0) collect_leaves(leaf, ch, reach, out);
 }
 
 }  // namespace fountain

@@ -73,8 +73,8 @@ class Space {
  private:
   struct SortState;
   void split(int c, SortState& s);
-  void collect_neighbours(int leaf, int node, std::vector<int>& out) const;
-  void collect_surroundings(int leaf, int node, std::vector<int>& out) const;
+  enum class Reach { cover, surroundings };
+  void collect_leaves(int leaf, int node, Reach reach, std::vector<int>& out) const;
   double wrap_delta(double d, int dim) const;
 
   SpaceConfig config_;
