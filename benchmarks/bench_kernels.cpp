@@ -58,34 +58,44 @@ BENCHMARK(BM_ForceInteraction);
 // The rotating sphere once collapsed (where its runs spend their time): 8000 dark-matter
 // particles in a Plummer sphere of scale 20 (kpc) around 8000 gas particles in an exponential
 // disc of scale length 3 and height 0.3, softenings 1 and 0.5, G = 1, total mass 1. The
-// targets are the disc's particles, passed 128 at a time in order of x (as cells pass their
-// active particles), with |a_old| from a first Barnes-Hut pass: the relative criterion at
-// alpha_force = 0.01, as in the runs. Items are targets; the argument is the tree's leaf size.
-void BM_GravityCollapsedDisc(benchmark::State& state) {
-  constexpr int n = 8000;
-  std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> U(0.0, 1.0);
+// targets are the disc's particles, in order of x (as cells pass their active particles).
+struct CollapsedDisc {
   std::vector<Vec3> pos;
-  std::vector<double> mass(2 * n, 1.0 / (2 * n)), eps;
-  for (int i = 0; i < n; ++i) {  // Plummer radii by inverting M(<r), capped at 10 scale radii
-    const double m = std::min(U(rng), 0.999);
-    const double r = 20.0 / std::sqrt(std::pow(m, -2.0 / 3.0) - 1.0);
-    const double c = 2.0 * U(rng) - 1.0, phi = 2.0 * M_PI * U(rng), s = std::sqrt(1.0 - c * c);
-    pos.push_back({r * s * std::cos(phi), r * s * std::sin(phi), r * c});
-    eps.push_back(1.0);
-  }
+  std::vector<double> mass, eps;
   std::vector<gravity::GravityTarget> targets;
-  for (int i = 0; i < n; ++i) {
-    const double R = -3.0 * std::log((1.0 - U(rng)) * (1.0 - U(rng))), phi = 2.0 * M_PI * U(rng);
-    const double z = 0.3 * std::log(U(rng) / (1.0 - U(rng) + 1e-300)) * 0.5;
-    pos.push_back({R * std::cos(phi), R * std::sin(phi), z});
-    eps.push_back(0.5);
-    targets.push_back({pos.back(), 0.5, gravity::kNoOldAcceleration, n + i});
+
+  CollapsedDisc() {
+    const int n = 8000;
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    mass.assign(2 * n, 1.0 / (2 * n));
+    for (int i = 0; i < n; ++i) {  // Plummer radii by inverting M(<r), capped at 10 scale radii
+      const double m = std::min(U(rng), 0.999);
+      const double r = 20.0 / std::sqrt(std::pow(m, -2.0 / 3.0) - 1.0);
+      const double c = 2.0 * U(rng) - 1.0, phi = 2.0 * M_PI * U(rng), s = std::sqrt(1.0 - c * c);
+      pos.push_back({r * s * std::cos(phi), r * s * std::sin(phi), r * c});
+      eps.push_back(1.0);
+    }
+    for (int i = 0; i < n; ++i) {
+      const double R = -3.0 * std::log((1.0 - U(rng)) * (1.0 - U(rng))), phi = 2.0 * M_PI * U(rng);
+      const double z = 0.3 * std::log(U(rng) / (1.0 - U(rng) + 1e-300)) * 0.5;
+      pos.push_back({R * std::cos(phi), R * std::sin(phi), z});
+      eps.push_back(0.5);
+      targets.push_back({pos.back(), 0.5, gravity::kNoOldAcceleration, n + i});
+    }
+    std::sort(targets.begin(), targets.end(), [](const auto& a, const auto& b) { return a.position.x < b.position.x; });
   }
-  std::sort(targets.begin(), targets.end(), [](const auto& a, const auto& b) { return a.position.x < b.position.x; });
+};
+
+// Walks of the disc's targets, 128 at a time, with |a_old| from a first Barnes-Hut pass: the
+// relative criterion at alpha_force = 0.01, as in the runs. Items are targets; the argument is
+// the tree's leaf size.
+void BM_GravityCollapsedDisc(benchmark::State& state) {
+  CollapsedDisc d;
+  auto& targets = d.targets;
   gravity::TreeConfig tree_config;
   tree_config.max_leaf_size = static_cast<int>(state.range(0));
-  const gravity::GravityTree tree(pos, mass, eps, tree_config);
+  const gravity::GravityTree tree(d.pos, d.mass, d.eps, tree_config);
   gravity::WalkConfig config;
   std::vector<gravity::GravityResult> results(targets.size());
   auto walk_all = [&] {
@@ -106,6 +116,26 @@ void BM_GravityCollapsedDisc(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(targets.size()));
 }
 BENCHMARK(BM_GravityCollapsedDisc)->Arg(4)->Arg(8)->Arg(16)->Unit(benchmark::kMillisecond);
+
+// The tree over the disc's 16,000 particles built anew (argument 0) or refitted to positions
+// moved by a small step (argument 1), as the engine's tree task does after a rebuild and in
+// the steps between. Items are particles.
+void BM_GravityTreeUpdate(benchmark::State& state) {
+  CollapsedDisc d;
+  const bool refit = state.range(0) == 1;
+  gravity::GravityTree tree(d.pos, d.mass, d.eps);
+  std::vector<Vec3> moved = d.pos;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> U(-1e-3, 1e-3);
+  for (Vec3& x : moved) x += Vec3{U(rng), U(rng), U(rng)};
+  for (auto _ : state) {
+    if (refit) tree.refit(moved, d.mass, d.eps);
+    else tree = gravity::GravityTree(moved, d.mass, d.eps);
+    benchmark::DoNotOptimize(tree.nodes().data());
+  }
+  state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(moved.size()));
+}
+BENCHMARK(BM_GravityTreeUpdate)->ArgName("refit")->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <numbers>
 #include <random>
+#include <span>
 #include <sstream>
 #include <string>
 #include <utility>
@@ -268,13 +269,15 @@ const char* criterion_name(OpeningCriterion c) {
 // ---------------------------------------------------------------------------------------
 // Tree structure
 
-TEST(GravityTree, NodesSummariseTheirParticles) {
-  const Problem& p = clustered_problem();
-  const GravityTree& tree = p.tree;
+// The accuracy target of the tree walk (see "Accuracy against direct summation" below).
+constexpr double kTargetMedian = 1e-3, kTargetP99 = 1e-2;
+
+// Every node holds its particles inside its cube and sums exactly their mass, largest
+// softening and (traceless) quadrupole; children tile their parent's range.
+void expect_nodes_summarise(const GravityTree& tree, const ParticleSet& set) {
   const auto& nodes = tree.nodes();
   ASSERT_FALSE(nodes.empty());
-  EXPECT_EQ(nodes[0].count, static_cast<std::int32_t>(p.set.x.size()));
-  EXPECT_NEAR(nodes[0].mass, 1.0, 1e-12);
+  EXPECT_EQ(nodes[0].count, static_cast<std::int32_t>(set.x.size()));
 
   std::vector<std::int32_t> seen(tree.size(), 0);
   for (std::int32_t i : tree.order()) ++seen[i];
@@ -288,9 +291,9 @@ TEST(GravityTree, NodesSummariseTheirParticles) {
     double max_eps = 0;
     for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
       const std::int32_t i = tree.order()[k];
-      mass += p.set.m[i];
-      max_eps = std::max(max_eps, p.set.eps[i]);
-      for (int d = 0; d < 3; ++d) ASSERT_LE(std::fabs(p.set.x[i][d] - node.centre[d]), 0.5 * node.side);
+      mass += set.m[i];
+      max_eps = std::max(max_eps, set.eps[i]);
+      for (int d = 0; d < 3; ++d) ASSERT_LE(std::fabs(set.x[i][d] - node.centre[d]), 0.5 * node.side);
     }
     EXPECT_NEAR(node.mass, static_cast<double>(mass), 1e-14 * static_cast<double>(mass));
     EXPECT_EQ(node.max_softening, max_eps);
@@ -309,6 +312,78 @@ TEST(GravityTree, NodesSummariseTheirParticles) {
       EXPECT_EQ(nodes[c].next, node.next);
     }
   }
+}
+
+TEST(GravityTree, NodesSummariseTheirParticles) {
+  const Problem& p = clustered_problem();
+  expect_nodes_summarise(p.tree, p.set);
+  EXPECT_NEAR(p.tree.nodes()[0].mass, 1.0, 1e-12);
+  for (const TreeNode& node : p.tree.nodes()) EXPECT_EQ(node.side, node.built_side);
+  EXPECT_FALSE(p.tree.loose());
+}
+
+// A refit of the sources the tree was built from changes nothing: the walks between rebuilds
+// start from the same tree a rebuild would give.
+TEST(GravityTree, RefitOfUnmovedSourcesIsTheBuild) {
+  const Problem& p = clustered_problem();
+  GravityTree refitted = p.tree;
+  refitted.refit(p.set.x, p.set.m, p.set.eps);
+  ASSERT_EQ(refitted.nodes().size(), p.tree.nodes().size());
+  for (std::size_t n = 0; n < refitted.nodes().size(); ++n) {
+    const TreeNode &a = refitted.nodes()[n], &b = p.tree.nodes()[n];
+    EXPECT_EQ(a.side, b.side);
+    EXPECT_EQ(a.mass, b.mass);
+    EXPECT_EQ(a.com, b.com);
+    EXPECT_EQ(a.quadrupole, b.quadrupole);
+  }
+  const auto targets = targets_of(p.set, &p.a_old);
+  const auto ra = walk(refitted, targets, with_alpha(0.01)), rb = walk(p.tree, targets, with_alpha(0.01));
+  for (std::size_t i = 0; i < ra.size(); ++i) ASSERT_EQ(ra[i].acceleration, rb[i].acceleration) << "particle " << i;
+}
+
+// Particles moved (random steps of up to a few leaf sides, masses changed as stars hide in
+// gas): the refitted tree summarises the moved particles as a fresh one would, its cubes
+// hold them, and its forces meet the accuracy target against direct summation of the moved set.
+TEST(GravityTree, RefitFollowsMovedParticles) {
+  const Problem& p = clustered_problem();
+  ParticleSet moved = p.set;
+  std::mt19937_64 rng(77);
+  for (std::size_t i = 0; i < moved.x.size(); ++i) {
+    for (int d = 0; d < 3; ++d) moved.x[i][d] += 0.02 * (uniform01(rng) - 0.5);
+    moved.m[i] *= 0.5 + uniform01(rng);
+  }
+  GravityTree refitted = p.tree;
+  refitted.refit(moved.x, moved.m, moved.eps);
+  expect_nodes_summarise(refitted, moved);
+  std::size_t grown = 0;
+  for (const TreeNode& node : refitted.nodes()) grown += node.side > node.built_side ? 1 : 0;
+  EXPECT_GT(grown, refitted.nodes().size() / 10);  // the check above had cubes to grow
+  EXPECT_TRUE(refitted.loose());                   // some leaves were far smaller than the steps
+
+  const DirectSums direct = direct_summation(moved.x, moved.m, moved.eps, 1.0);
+  const GravityTree fresh(moved.x, moved.m, moved.eps);
+  std::vector<double> a_old(moved.x.size());
+  for (std::size_t i = 0; i < a_old.size(); ++i) a_old[i] = norm(direct.acceleration[i]);
+  const auto targets = targets_of(moved, &a_old);
+  const ErrorStats e_refit = errors(walk(refitted, targets, with_alpha(0.01)), direct);
+  const ErrorStats e_fresh = errors(walk(fresh, targets, with_alpha(0.01)), direct);
+  std::cout << "moved clustered Plummer, alpha_force 0.01: refitted median " << e_refit.median << ", 99% "
+            << e_refit.p99 << ", " << e_refit.interactions_per_particle << " interactions/particle; fresh median "
+            << e_fresh.median << ", 99% " << e_fresh.p99 << ", " << e_fresh.interactions_per_particle << "\n";
+  EXPECT_LT(e_refit.median, kTargetMedian);
+  EXPECT_LT(e_refit.p99, kTargetP99);
+
+  // Small steps leave the tree tight.
+  ParticleSet nudged = p.set;
+  for (std::size_t i = 0; i < nudged.x.size(); ++i)
+    for (int d = 0; d < 3; ++d) nudged.x[i][d] += 1e-5 * (uniform01(rng) - 0.5);
+  GravityTree tight = p.tree;
+  tight.refit(nudged.x, nudged.m, nudged.eps);
+  expect_nodes_summarise(tight, nudged);
+  EXPECT_FALSE(tight.loose());
+
+  EXPECT_THROW(tight.refit(std::span(nudged.x).first(10), std::span(nudged.m).first(10), std::span(nudged.eps).first(10)),
+               std::invalid_argument);
 }
 
 TEST(GravityTree, BuildAndWalkAreDeterministic) {
@@ -564,8 +639,6 @@ void expect_accurate(const Problem& p, double alpha, OpeningCriterion criterion,
   EXPECT_LT(e.median, median_bound) << p.name << ", " << criterion_name(criterion) << ", alpha_force " << alpha;
   EXPECT_LT(e.p99, p99_bound) << p.name << ", " << criterion_name(criterion) << ", alpha_force " << alpha;
 }
-
-constexpr double kTargetMedian = 1e-3, kTargetP99 = 1e-2;
 
 TEST(GravityAccuracy, StretchedLattice) {
   const Problem& p = lattice_problem();

@@ -101,6 +101,7 @@ void Engine::rebuild() {
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
   space_.rebuild(gas_, dm_);
+  ctx_->tree.reset();  // particles were reordered: the next gravity step builds a new tree
   if (ranks_) assign_owners(measured);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
@@ -349,7 +350,7 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.density) hydro::density(ctx, t.ci);
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
     else if (t.type == T.force) hydro::force(ctx, t.ci);
-    else if (t.type == T.gravity_tree) gravity::build_tree(ctx);
+    else if (t.type == T.gravity_tree) gravity::update_tree(ctx);
     else if (t.type == T.gravity) gravity::walk_cell(ctx, t.ci);
     else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);

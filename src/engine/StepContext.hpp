@@ -35,7 +35,8 @@ struct StepContext {
   // below half in one kick; with it the cooling task's implicit rate keeps u positive.
   const cooling::RadiativeCooling* cooling = nullptr;
 
-  // This step's gravity tree, built by the tree task from every particle's drifted position.
+  // This step's gravity tree: built after each recut of the cells, refitted by the tree task
+  // in the steps between.
   std::unique_ptr<gravity::GravityTree> tree;
 
   IntegerTime ti_current = 0;

@@ -4,7 +4,7 @@
 
 namespace fountain::gravity {
 
-void build_tree(StepContext& ctx) {
+void update_tree(StepContext& ctx) {
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
@@ -23,7 +23,8 @@ void build_tree(StepContext& ctx) {
     m.push_back(dm.mass[i]);
     eps.push_back(ctx.gravity.softening(dm.species[i]));
   }
-  ctx.tree = std::make_unique<GravityTree>(x, m, eps);
+  if (ctx.tree && !ctx.tree->loose() && ctx.tree->size() == n) ctx.tree->refit(x, m, eps);
+  else ctx.tree = std::make_unique<GravityTree>(x, m, eps);
 }
 
 namespace {

@@ -4,9 +4,12 @@
 
 namespace fountain::gravity {
 
-// Builds ctx.tree from every particle at its drifted position: gas (its gravitating mass,
-// at the gas softening) and dark matter. Sources are numbered gas first, then dark matter.
-void build_tree(StepContext& ctx);
+// Brings ctx.tree to every particle's drifted position: gas (its gravitating mass, at the gas
+// softening) and dark matter, numbered gas first, then dark matter. The tree is refitted
+// while it has the same sources in the same order (the engine drops it when the cells are
+// recut, which reorders particles and adds or removes stars) and has not grown loose;
+// otherwise it is built anew.
+void update_tree(StepContext& ctx);
 
 // Accelerations and potentials of the active particles of leaf `c` from the tree (gather
 // only: writes nothing but c's particles). A particle with no previous acceleration gets the

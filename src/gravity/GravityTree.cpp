@@ -30,6 +30,8 @@ int octant(const Vec3& x, const Vec3& centre) {
   return (x.x >= centre.x ? 1 : 0) | (x.y >= centre.y ? 2 : 0) | (x.z >= centre.z ? 4 : 0);
 }
 
+double farthest(const Vec3& d) { return std::max({std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)}); }
+
 void check_inputs(std::span<const Vec3> positions, std::span<const double> masses,
                   std::span<const double> softenings, const TreeConfig& config) {
   if (masses.size() != positions.size() || softenings.size() != positions.size())
@@ -77,22 +79,42 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
   for (TreeNode& node : nodes_)
     if (node.next == static_cast<std::int32_t>(nodes_.size())) node.next = -1;
 
+  for (std::int32_t k = 0; k < n; ++k) index_[k] = items[static_cast<std::size_t>(k)].index;
+  std::vector<double> eps;
+  load_sources(positions, masses, softenings, eps);
+  compute_moments(eps);
+}
+
+void GravityTree::refit(std::span<const Vec3> positions, std::span<const double> masses,
+                        std::span<const double> softenings) {
+  check_inputs(positions, masses, softenings, config_);
+  if (positions.size() != index_.size())
+    throw std::invalid_argument("GravityTree::refit: " + std::to_string(positions.size()) + " sources for a tree of " +
+                                std::to_string(index_.size()));
+  std::vector<double> eps;
+  load_sources(positions, masses, softenings, eps);
+  compute_moments(eps);
+}
+
+// The sources in tree order, with what the walk derives from their softenings.
+void GravityTree::load_sources(std::span<const Vec3> positions, std::span<const double> masses,
+                               std::span<const double> softenings, std::vector<double>& eps) {
+  const std::size_t n = index_.size();
   pos_.resize(n);
   mass_.resize(n);
   spline_.resize(n);
   spline_f_.resize(n);
   spline_inv_f_.resize(n);
-  std::vector<double> eps(static_cast<std::size_t>(n));
-  for (std::int32_t k = 0; k < n; ++k) {
-    index_[k] = items[static_cast<std::size_t>(k)].index;
-    pos_[k] = positions[index_[k]];
-    mass_[k] = masses[index_[k]];
-    eps[static_cast<std::size_t>(k)] = softenings[index_[k]];
-    spline_[k] = spline_length(eps[static_cast<std::size_t>(k)]);
+  eps.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(index_[k]);
+    pos_[k] = positions[i];
+    mass_[k] = masses[i];
+    eps[k] = softenings[i];
+    spline_[k] = spline_length(eps[k]);
     spline_f_[k] = static_cast<float>(spline_[k]);
     spline_inv_f_[k] = 1.0f / spline_f_[k];
   }
-  compute_moments(eps);
 }
 
 // Sequential depth-first build of the topology: nodes come out in preorder, so a node's first
@@ -104,6 +126,7 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
   TreeNode node;
   node.centre = centre;
   node.side = side;
+  node.built_side = side;
   node.first = first;
   node.count = count;
   nodes_.push_back(node);
@@ -133,39 +156,67 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
   nodes_[self].next = static_cast<std::int32_t>(nodes_.size());
 }
 
-// Moments from the leaves up (children follow their parent in preorder, so a reverse pass
-// meets every child first): a leaf sums its particles, a parent combines its children's
-// moments about its own centre of mass (the parallel-axis shift of each child's quadrupole).
-// One pass over the particles in all, instead of one per level.
+
+// Moments from the leaves up: the leaves sum their particles, then the parents, in reverse preorder so that every child comes first,
+// combine their children's moments about their own centre of mass (the parallel-axis shift of
+// each child's quadrupole). Each cube keeps its centre and grows from its built side just
+// enough to hold what is inside: a leaf its particles, a parent its children's cubes (only
+// once one of them has grown: built children tile their parent).
 void GravityTree::compute_moments(const std::vector<double>& eps) {
-  for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n) {
+  if (leaves_.empty())
+    for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n)
+      (nodes_[n].first_child < 0 ? leaves_ : parents_).push_back(n);
+  bool loose = false;
+  for (const std::int32_t l : leaves_) {
+    TreeNode& node = nodes_[l];
+    auto& q = node.quadrupole;
+    q = {};
+    node.mass = 0.0;
+    node.max_softening = 0.0;
+    Vec3 weighted;
+    double reach = 0.0;
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+      node.mass += mass_[k];
+      weighted += mass_[k] * pos_[k];
+      node.max_softening = std::max(node.max_softening, eps[static_cast<std::size_t>(k)]);
+      reach = std::max(reach, farthest(pos_[k] - node.centre));
+    }
+    node.side = std::max(node.built_side, 2.0 * reach);
+    // A massless node still needs a finite position for the distance tests.
+    node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
+    loose = loose || node.side > 2.0 * node.built_side;
+  }
+  for (const std::int32_t n : parents_) {
     TreeNode& node = nodes_[n];
     auto& q = node.quadrupole;
+    q = {};
+    node.mass = 0.0;
+    node.max_softening = 0.0;
+    node.side = node.built_side;
     Vec3 weighted;
-    if (node.first_child < 0) {
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        node.mass += mass_[k];
-        weighted += mass_[k] * pos_[k];
-        node.max_softening = std::max(node.max_softening, eps[static_cast<std::size_t>(k)]);
-      }
-      // A massless node still needs a finite position for the distance tests.
-      node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
-      continue;
-    }
     const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
+    double reach = 0.0;
+    bool grown = false;
     for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
-      node.mass += nodes_[c].mass;
-      weighted += nodes_[c].mass * nodes_[c].com;
-      node.max_softening = std::max(node.max_softening, nodes_[c].max_softening);
+      const TreeNode& child = nodes_[c];
+      node.mass += child.mass;
+      weighted += child.mass * child.com;
+      node.max_softening = std::max(node.max_softening, child.max_softening);
+      reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
+      grown = grown || child.side != child.built_side;
     }
+    // The margin covers the rounding of the sum above: a larger cube only opens more.
+    if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
     node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
     for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
       const TreeNode& child = nodes_[c];
       for (int m = 0; m < 6; ++m) q[m] += child.quadrupole[m];
       add_point_quadrupole(q, child.mass, child.com - node.com);
     }
+    loose = loose || node.side > 2.0 * node.built_side;
   }
+  loose_ = loose;
 }
 
 }  // namespace fountain::gravity

@@ -60,6 +60,7 @@ struct TreeNode {
   std::int32_t first_child = -1;  // -1 for a leaf; otherwise the next node in the array
   std::int32_t next = -1;         // node to visit after this one's subtree; -1 ends the walk
   std::array<double, 6> quadrupole{};
+  double built_side = 0.0;  // the cube's side when built; a refit grows `side` from it
 };
 
 // Built once from the sources (copied, in tree order), then read-only: any number of walks
@@ -69,6 +70,16 @@ class GravityTree {
  public:
   GravityTree(std::span<const Vec3> positions, std::span<const double> masses,
               std::span<const double> softenings, const TreeConfig& config = TreeConfig{});
+
+  // Keeps the topology and the particles' tree order, and recomputes every node from the
+  // sources' new positions, masses and softenings (same count, same source indices): moments,
+  // and cubes grown about their built centres until they hold their particles again, so every
+  // opening test stays as valid as after a build. O(N) and no sort, for the steps between
+  // rebuilds. Unchanged sources give the built tree back, bit for bit.
+  void refit(std::span<const Vec3> positions, std::span<const double> masses, std::span<const double> softenings);
+  // Whether a refit has grown some node's cube past twice its built side: the walk then opens
+  // more than a fresh tree would, and the caller should build anew.
+  bool loose() const { return loose_; }
 
   GravityResult accelerate(const GravityTarget& target, const WalkConfig& config) const;
 
@@ -93,6 +104,8 @@ class GravityTree {
   };
   void build(std::int32_t first, std::int32_t count, const Vec3& centre, double side, int depth,
              std::vector<SortItem>& items, std::vector<SortItem>& scratch);
+  void load_sources(std::span<const Vec3> positions, std::span<const double> masses,
+                    std::span<const double> softenings, std::vector<double>& eps);
   void compute_moments(const std::vector<double>& eps);
 
   struct Group;
@@ -108,6 +121,8 @@ class GravityTree {
   std::vector<double> spline_;     // the sources' spline lengths (2.8 eps)
   std::vector<float> spline_f_;    // the same in float, for the near loop
   std::vector<float> spline_inv_f_;  // 1 / spline_f_
+  std::vector<std::int32_t> leaves_, parents_;  // node indices, each in reverse preorder
+  bool loose_ = false;
 };
 
 }  // namespace fountain::gravity
