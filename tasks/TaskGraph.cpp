@@ -41,7 +41,8 @@ void TaskGraph::finalize() {
   }
   // Bucket the edges by their first task (a counting sort: the engine rebuilds its graph
   // often, and a comparison sort of all edges was a sixth of a collapsing sphere's run),
-  // then sort and deduplicate each task's short list.
+  // then drop repeats from each task's list by marking what it already unlocks (sorting the
+  // lists instead was still 1% of that run). Lists keep the order the edges were added in.
   const std::size_t n = tasks_.size();
   std::vector<std::size_t> start(n + 1, 0);
   for (const auto& e : edges_) ++start[static_cast<std::size_t>(e.first) + 1];
@@ -55,11 +56,14 @@ void TaskGraph::finalize() {
   unlock_offsets_.assign(n + 1, 0);
   unlock_targets_.clear();
   unlock_targets_.reserve(targets.size());
+  std::vector<int> listed_by(n, -1);  // the last task whose list took this one
   for (std::size_t t = 0; t < n; ++t) {
-    const auto b = targets.begin() + static_cast<std::ptrdiff_t>(start[t]);
-    const auto e = targets.begin() + static_cast<std::ptrdiff_t>(start[t + 1]);
-    std::sort(b, e);
-    unlock_targets_.insert(unlock_targets_.end(), b, std::unique(b, e));
+    for (std::size_t k = start[t]; k < start[t + 1]; ++k) {
+      const int u = targets[k];
+      if (listed_by[static_cast<std::size_t>(u)] == static_cast<int>(t)) continue;
+      listed_by[static_cast<std::size_t>(u)] = static_cast<int>(t);
+      unlock_targets_.push_back(u);
+    }
     unlock_offsets_[t + 1] = unlock_targets_.size();
   }
   finalized_ = true;

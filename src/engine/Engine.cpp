@@ -100,7 +100,7 @@ void Engine::rebuild() {
   remove_dissolved();
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
-  space_.rebuild(gas_, dm_);
+  space_.rebuild(gas_, dm_, [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); });
   ctx_->tree.reset();  // particles were reordered: the next gravity step builds a new tree
   if (ranks_) assign_owners(measured);
   // A particle whose step ends now is due; one whose step began now (a rebuild between

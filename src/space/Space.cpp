@@ -40,7 +40,7 @@ struct Space::SortState {
   std::vector<std::size_t> order, scratch, dm_order, dm_scratch;
 };
 
-void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
+void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
   ++rebuilds_;
   const std::size_t n = gas.size(), n_dm = dm.size();
   // The box.
@@ -194,12 +194,15 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm) {
 
   neighbours_.assign(leaves_.size(), {});
   surroundings_.assign(leaves_.size(), {});
-  for (std::size_t l = 0; l < leaves_.size(); ++l)
-    if (cells_[static_cast<std::size_t>(leaves_[l])].count > 0)
-      for (int t : top_) {
-        collect_leaves(leaves_[l], t, Reach::cover, neighbours_[l]);
-        collect_leaves(leaves_[l], t, Reach::surroundings, surroundings_[l]);
-      }
+  const std::function<void(std::size_t)> lists_of = [this](std::size_t l) {
+    if (cells_[static_cast<std::size_t>(leaves_[l])].count == 0) return;
+    for (int t : top_) collect_leaves(leaves_[l], t, neighbours_[l], surroundings_[l]);
+  };
+  if (for_each) {
+    for_each(leaves_.size(), lists_of);
+  } else {
+    for (std::size_t l = 0; l < leaves_.size(); ++l) lists_of(l);
+  }
 }
 
 namespace {
@@ -310,20 +313,23 @@ int Space::cell_at(const Vec3& x) const {
 }
 
 // Leaves with gas below `node` whose boxes lie within reach of leaf `leaf`'s: its neighbours
-// (reach: the larger cover radius of the two; an inner node's cover bounds its leaves') or
-// its surroundings (reach: surroundings_reach of the leaf).
-void Space::collect_leaves(int leaf, int node, Reach reach, std::vector<int>& out) const {
+// (reach: the larger cover radius of the two; an inner node's cover bounds its leaves') and
+// its surroundings (reach: surroundings_reach of the leaf), both in one walk.
+void Space::collect_leaves(int leaf, int node, std::vector<int>& neighbours, std::vector<int>& surroundings) const {
   const Cell& a = cells_[static_cast<std::size_t>(leaf)];
   const Cell& b = cells_[static_cast<std::size_t>(node)];
   if (b.count == 0) return;
-  const double r = reach == Reach::cover ? std::max(a.r_cover, b.r_cover) : surroundings_reach(a);
-  if (box_distance(a, b) >= r) return;
+  const double d = box_distance(a, b);
+  const bool neighbour = d < std::max(a.r_cover, b.r_cover), around = d < surroundings_reach(a);
+  if (!neighbour && !around) return;
   if (b.leaf) {
-    if (node != leaf) out.push_back(node);
+    if (node == leaf) return;
+    if (neighbour) neighbours.push_back(node);
+    if (around) surroundings.push_back(node);
     return;
   }
   for (int ch : b.children)
-    if (ch >= 0) collect_leaves(leaf, ch, reach, out);
+    if (ch >= 0) collect_leaves(leaf, ch, neighbours, surroundings);
 }
 
 }  // namespace fountain

@@ -1,6 +1,8 @@
 // The domain: a top-level grid of cells, each split into an octree, and neighbour-cell lists.
 #pragma once
 #include <array>
+#include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -22,9 +24,14 @@ class Space {
  public:
   explicit Space(SpaceConfig config) : config_(config) {}
 
+  // Calls fn(k) for k in [0, n), in any order and possibly in parallel.
+  using ForEach = std::function<void(std::size_t n, const std::function<void(std::size_t)>& fn)>;
+
   // Sorts the particles of both species into cells (every field permuted), builds the octree,
   // the leaves' cover radii and their neighbour lists. Positions are wrapped into a periodic box.
-  void rebuild(GasParticles& gas, CollisionlessParticles& dm);
+  // Each leaf's lists are found by one call of `for_each` (serially when it is empty): they
+  // depend only on the cells, so the order of the calls does not matter.
+  void rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {});
 
   const std::vector<Cell>& cells() const { return cells_; }
   std::vector<Cell>& cells() { return cells_; }
@@ -73,8 +80,7 @@ class Space {
  private:
   struct SortState;
   void split(int c, SortState& s);
-  enum class Reach { cover, surroundings };
-  void collect_leaves(int leaf, int node, Reach reach, std::vector<int>& out) const;
+  void collect_leaves(int leaf, int node, std::vector<int>& neighbours, std::vector<int>& surroundings) const;
   double wrap_delta(double d, int dim) const;
 
   SpaceConfig config_;
