@@ -6,6 +6,7 @@
 #endif
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
@@ -225,6 +226,10 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
 }  // namespace fountain::tasks
 
 namespace fountain::tasks {
+
+void Executor::run_beside(const std::function<void()>& a, const std::function<void()>& b) {
+  arena_->execute([&] { tbb::parallel_invoke(a, b); });
+}
 
 void Executor::for_each(std::size_t n, const std::function<void(std::size_t)>& fn) {
   arena_->execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) { fn(k); }); });

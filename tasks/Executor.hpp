@@ -57,6 +57,10 @@ class Executor {
   // Runs fn(0..n-1) in parallel on this executor's threads (for simple per-cell sweeps).
   void for_each(std::size_t n, const std::function<void(std::size_t)>& fn);
 
+  // Runs a and b at once on this executor's threads (one after the other on one thread) and
+  // returns when both are done; they must not touch the same data.
+  void run_beside(const std::function<void()>& a, const std::function<void()>& b);
+
   // Wall time of the last run, and the time spent inside tasks summed over threads (ns).
   std::int64_t last_wall_ns() const { return last_wall_ns_; }
   std::int64_t last_busy_ns() const { return last_busy_ns_; }

@@ -101,7 +101,8 @@ void Engine::rebuild() {
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
   space_.rebuild(gas_, dm_, [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); });
-  ctx_->tree.reset();  // particles were reordered: the next gravity step builds a new tree
+  ctx_->tree.reset();  // particles were reordered: a new tree is built below
+  ctx_->tree_current = false;
   if (ranks_) assign_owners(measured);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
@@ -120,7 +121,14 @@ void Engine::rebuild() {
     cell.ti_end_min = end;
   }
   ctx_->cover_exceeded = false;
-  build_graph();
+  if (config_.gravity.enabled) {
+    // The new particle order needs a new gravity tree (its build is serial): it is built
+    // beside the graph rather than in the step's tree task, where it would hold up every walk.
+    executor_.run_beside([this] { gravity::update_tree(*ctx_); }, [this] { build_graph(); });
+    ctx_->tree_current = true;
+  } else {
+    build_graph();
+  }
   rebuild_pending_ = false;
 }
 

@@ -38,6 +38,9 @@ struct StepContext {
   // This step's gravity tree: built after each recut of the cells, refitted by the tree task
   // in the steps between.
   std::unique_ptr<gravity::GravityTree> tree;
+  // Set when the tree was built at the particles' present positions (at a rebuild, before the
+  // step's graph): the step's tree task then has nothing to do.
+  bool tree_current = false;
 
   IntegerTime ti_current = 0;
 

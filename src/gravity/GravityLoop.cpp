@@ -5,6 +5,10 @@
 namespace fountain::gravity {
 
 void update_tree(StepContext& ctx) {
+  if (ctx.tree_current) {
+    ctx.tree_current = false;  // the next call follows moved particles
+    return;
+  }
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
