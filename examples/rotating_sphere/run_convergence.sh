@@ -7,7 +7,8 @@
 #   sh examples/rotating_sphere/run_convergence.sh            # all six runs, then the plots
 #   SIZES="2000" SCHEMES="msph" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
 #
-# Runs go to examples/rotating_sphere/output/<N>_<scheme>/; a finished run is not redone.
+# Runs go to examples/rotating_sphere/output/<N>_<scheme>/ ($OUTPUT/<N>_<scheme>/ if set) and
+# the figures to docs/validation/ ($DOCS if set); a finished run is not redone.
 # Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
 # the time unit is 977.8 Gyr, so 1.2 Gyr is t = 1.227e-3.
 set -eu
@@ -17,7 +18,7 @@ root=$(cd "$here/../.." && pwd)
 # FOUNTAIN_BIN: the executable (default build/fountain, built if missing).
 bin=${FOUNTAIN_BIN:-$root/build/fountain}
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
-out="$here/output"
+out=${OUTPUT:-$here/output}
 mkdir -p "$out"
 threads=${THREADS:-2}
 for n in ${SIZES:-2000 4000 8000}; do
@@ -62,4 +63,4 @@ EOT
     run_or_resume "$dir"
   done
 done
-/usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "$root/docs/validation"
+/usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "${DOCS:-$root/docs/validation}"
