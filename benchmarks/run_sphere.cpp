@@ -2,8 +2,9 @@
 // formation and MFB): wall time, updates per second and time per task category over a fixed
 // stretch of simulated time, written as JSON. Usage: fountain_sphere_bench [-n 8000]
 // [--threads N] [--t-end T] [--measure-from T0] [--star-formation --eps-cold 0.4 --eps-hot 0.4]
-// [--json FILE]; with --measure-from the run before T0 is not timed (star formation starts
-// only once the disc has formed).
+// [--ic FILE] [--json FILE]; with --measure-from the run before T0 is not timed (star formation
+// starts only once the disc has formed); with --ic the run starts from that file's particles
+// (a snapshot of the collapsed sphere, say) instead of the generated sphere, its clock at zero.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -16,6 +17,7 @@
 #include "RankFields.hpp"
 #include "tasks/MpiSession.hpp"
 #include "ics/RotatingSphere.hpp"
+#include "io/InitialConditions.hpp"
 
 using namespace fountain;
 
@@ -27,7 +29,7 @@ int main(int argc, char** argv) {
   double t_end = 5.0e-5, softening = 0.001;
   bool msph = true, cooling = true, star_formation = false;
   double measure_from = 0.0, eps_cold = 0.4, eps_hot = 0.4;
-  std::string json_path;
+  std::string json_path, ic_path;
   app.add_option("-n,--particles", per_species, "particles per species");
   app.add_option("-t,--threads", threads);
   app.add_option("--t-end", t_end, "simulated time to run (internal units; 977.8 Gyr each)");
@@ -35,6 +37,8 @@ int main(int argc, char** argv) {
   app.add_option("--msph", msph);
   app.add_option("--cooling", cooling);
   app.add_option("--json", json_path);
+  app.add_option("--ic", ic_path, "start from this HDF5 file's particles (GADGET layout, e.g. a snapshot)")
+      ->check(CLI::ExistingFile);
   app.add_flag("--star-formation", star_formation, "star formation and MFB on");
   app.add_option("--eps-cold", eps_cold);
   app.add_option("--eps-hot", eps_hot);
@@ -43,7 +47,15 @@ int main(int argc, char** argv) {
 
   ics::RotatingSphereParams sp;
   sp.particles_per_species = per_species;
-  ics::RotatingSphereIC ic = ics::rotating_sphere(sp);
+  ics::RotatingSphereIC ic;
+  if (ic_path.empty()) {
+    ic = ics::rotating_sphere(sp);
+  } else {
+    io::InitialConditions file = io::read_initial_conditions(ic_path);
+    ic.gas = std::move(file.gas);
+    ic.dm = std::move(file.dm);
+    per_species = static_cast<int>(ic.gas.size());
+  }
   RunConfig c;
   c.t_end = t_end;
   c.threads = threads;

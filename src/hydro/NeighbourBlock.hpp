@@ -3,29 +3,49 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <vector>
+#include <memory>
 
 #include "core/Vec3.hpp"
 
 namespace fountain::hydro {
 
+// A grow-only array whose elements start uninitialised. A block is sized for the most
+// candidates a neighbourhood could hold, but only the pages actually written become resident
+// (a zero-filled std::vector touched all of them: ~30 B per particle of peak memory on two
+// threads in the 250k Sedov run).
+template <class T>
+class ScratchArray {
+ public:
+  // Room for n elements; the contents are not kept when it grows.
+  void ensure(std::size_t n) {
+    if (n <= capacity_) return;
+    data_.reset(new T[n]);
+    capacity_ = n;
+  }
+  T& operator[](std::size_t k) { return data_[k]; }
+  const T& operator[](std::size_t k) const { return data_[k]; }
+  T* data() { return data_.get(); }
+  const T* data() const { return data_.get(); }
+
+ private:
+  std::unique_ptr<T[]> data_;
+  std::size_t capacity_ = 0;
+};
+
 // Positions (as the periodic image nearest the target cell) and indices of the candidate
 // neighbours, so the inner loops scan short contiguous arrays.
 struct NeighbourBlock {
-  std::vector<double> x, y, z, h2;
-  std::vector<std::size_t> index;
-  std::vector<double> r2;        // scratch: squared distances to the particle being updated
-  std::vector<std::uint32_t> hit;  // scratch: the candidates within reach of that particle
+  ScratchArray<double> x, y, z, h2;
+  ScratchArray<std::size_t> index;
+  ScratchArray<double> r2;        // scratch of within(): squared distances to the particle being updated
+  ScratchArray<std::uint32_t> hit;  // scratch of within(): the candidates within reach of that particle
 
   // Empties the block and makes room for `capacity` candidates: add() does not check, so
   // the callers that fill a block know how many candidates they can add at most.
   void reset(std::size_t capacity) {
     n_ = 0;
-    if (x.size() < capacity) {
-      for (auto* v : {&x, &y, &z, &h2, &r2}) v->resize(capacity);
-      index.resize(capacity);
-      hit.resize(capacity);
-    }
+    for (auto* v : {&x, &y, &z, &h2}) v->ensure(capacity);
+    index.ensure(capacity);
   }
   void add(const Vec3& p, double h2_value, std::size_t i) {
     x[n_] = p.x;
@@ -50,6 +70,8 @@ struct NeighbourBlock {
   // Squared distances from p to every candidate, in a loop the compiler can vectorise.
   void distances_to(const Vec3& p) {
     const std::size_t n = size();
+    r2.ensure(n);
+    hit.ensure(n);
     const double* bx = x.data();
     const double* by = y.data();
     const double* bz = z.data();
