@@ -375,6 +375,34 @@ TEST(Executor, EveryActiveTaskRunsExactlyOnce) {
   }
 }
 
+TEST(TaskGraph, RepeatedEdgesCountOnceAndListsKeepTheirOrder) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  TaskGraph g;
+  for (int i = 0; i < 6; ++i) g.add(ty, i, -1, -1);
+  for (int after : {4, 2, 4, 5, 2, 3, 5}) g.depends(0, after);
+  g.depends(1, 3);
+  g.depends(1, 3);
+  g.finalize();
+  const auto u0 = g.unlocks(0), u1 = g.unlocks(1);
+  EXPECT_EQ(std::vector<int>(u0.begin(), u0.end()), (std::vector<int>{4, 2, 5, 3}));
+  EXPECT_EQ(std::vector<int>(u1.begin(), u1.end()), (std::vector<int>{3}));
+  EXPECT_EQ(g.num_dependencies(), 5u);
+}
+
+TEST(Executor, RunBesideRunsBothAndReturnsAfterBoth) {
+  Executor exec(2);
+  for (int repeat = 0; repeat < 50; ++repeat) {
+    std::vector<int> a(1000, 0), b(1000, 0);
+    std::atomic<int> calls{0};
+    exec.run_beside([&] { std::fill(a.begin(), a.end(), repeat); ++calls; },
+                    [&] { std::fill(b.begin(), b.end(), -repeat); ++calls; });
+    ASSERT_EQ(calls.load(), 2);
+    EXPECT_TRUE(std::all_of(a.begin(), a.end(), [&](int v) { return v == repeat; }));
+    EXPECT_TRUE(std::all_of(b.begin(), b.end(), [&](int v) { return v == -repeat; }));
+  }
+}
+
 TEST(Executor, DiamondNeverStartsBeforeItsPredecessorsEnd) {
   TaskTypeRegistry types;
   const int ty = types.add({"node", "", "test"});
