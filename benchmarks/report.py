@@ -34,8 +34,11 @@ def main():
             print(f"\n{p}: parallel efficiency on 2 threads {one['wall_s'] / (2 * two['wall_s']):.0%} (wall), "
                   f"{one['full_step_us_per_particle'] / (2 * two['full_step_us_per_particle']):.0%} (full steps)")
 
-    for label, group in (("rotating sphere", [r for r in spheres if not r.get("star_formation")]),
-                         ("rotating sphere, star formation + MFB", [r for r in spheres if r.get("star_formation")])):
+    generated = [r for r in spheres if r.get("initial_conditions", "generated") == "generated"]
+    from_file = [r for r in spheres if r.get("initial_conditions", "generated") != "generated"]
+    for label, group in (("rotating sphere", [r for r in generated if not r.get("star_formation")]),
+                         ("rotating sphere, star formation + MFB", [r for r in generated if r.get("star_formation")]),
+                         ("rotating sphere, collapsed (from a snapshot)", from_file)):
         if not group:
             continue
         print(f"\n| {label} | particles | threads | wall (s) | steps | updates/s | hydro | gravity | cooling "

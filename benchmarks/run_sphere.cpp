@@ -10,6 +10,7 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <map>
 
@@ -105,13 +106,14 @@ int main(int argc, char** argv) {
   for (const auto& [name, s] : category_s) categories += fmt::format("\"{}\": {:.4f}, ", name, s);
   const double thread_time = wall * e.threads();
   const std::string json = fmt::format(
-      "{{\"problem\": \"rotating_sphere\", \"particles_per_species\": {}, \"particles\": {}, \"threads\": {}, "
+      "{{\"problem\": \"rotating_sphere\", \"initial_conditions\": \"{}\", \"particles_per_species\": {}, "
+      "\"particles\": {}, \"threads\": {}, "
       "\"msph\": {}, \"cooling\": {}, \"star_formation\": {}, \"eps_cold\": {}, \"eps_hot\": {}, "
       "\"measured_from\": {}, \"t_end\": {}, \"mass_formed_measured\": {:.4g}, \"promotions\": {}, "
       "\"setup_s\": {:.3f}, \"wall_s\": {:.3f}, \"steps\": {}, "
       "\"updates_per_s\": {:.4g}, \"task_seconds_by_category\": {{{}\"outside_tasks\": {:.4f}}}, "
       "\"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, {}}}\n",
-      per_species, n, e.threads(), msph, cooling, star_formation, eps_cold, eps_hot, time_before, t_end,
+      ic_path.empty() ? "generated" : std::filesystem::path(ic_path).filename().string(), per_species, n, e.threads(), msph, cooling, star_formation, eps_cold, eps_hot, time_before, t_end,
       e.star_formation_total().mass_formed - stars_before, e.star_formation_total().promotions, setup, wall,
       e.steps() - steps_before, updates / wall, categories,
       thread_time - tasks_busy, tasks_wall > 0 ? tasks_busy / thread_time : 0.0,
