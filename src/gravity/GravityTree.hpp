@@ -63,9 +63,10 @@ struct TreeNode {
   double built_side = 0.0;  // the cube's side when built; a refit grows `side` from it
 };
 
-// Built once from the sources (copied, in tree order), then read-only: any number of walks
-// may run on it at once from any threads, and each walk's result depends only on the tree
-// and its targets, so per-cell walk tasks are reproducible whatever the thread count.
+// Built from the sources (copied, in tree order) and refitted to their later positions; in
+// between, read-only: any number of walks may run on it at once from any threads, and each
+// walk's result depends only on the tree and its targets, so per-cell walk tasks are
+// reproducible whatever the thread count.
 class GravityTree {
  public:
   GravityTree(std::span<const Vec3> positions, std::span<const double> masses,
