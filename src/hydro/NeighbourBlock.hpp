@@ -11,7 +11,7 @@ namespace fountain::hydro {
 
 // A grow-only array whose elements start uninitialised. A block is sized for the most
 // candidates a neighbourhood could hold, but only the pages actually written become resident
-// (a zero-filled std::vector touched all of them: ~30 B per particle of peak memory on two
+// (a zero-filled std::vector touched all of them: ~20 B per particle of peak memory on two
 // threads in the 250k Sedov run).
 template <class T>
 class ScratchArray {
