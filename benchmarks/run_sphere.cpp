@@ -113,7 +113,8 @@ int main(int argc, char** argv) {
       "\"setup_s\": {:.3f}, \"wall_s\": {:.3f}, \"steps\": {}, "
       "\"updates_per_s\": {:.4g}, \"task_seconds_by_category\": {{{}\"outside_tasks\": {:.4f}}}, "
       "\"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, {}}}\n",
-      ic_path.empty() ? "generated" : std::filesystem::path(ic_path).filename().string(), per_species, n, e.threads(), msph, cooling, star_formation, eps_cold, eps_hot, time_before, t_end,
+      ic_path.empty() ? "generated" : std::filesystem::path(ic_path).filename().string(), per_species, n,
+      e.threads(), msph, cooling, star_formation, eps_cold, eps_hot, time_before, t_end,
       e.star_formation_total().mass_formed - stars_before, e.star_formation_total().promotions, setup, wall,
       e.steps() - steps_before, updates / wall, categories,
       thread_time - tasks_busy, tasks_wall > 0 ? tasks_busy / thread_time : 0.0,

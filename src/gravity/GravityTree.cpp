@@ -156,49 +156,38 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
   nodes_[self].next = static_cast<std::int32_t>(nodes_.size());
 }
 
-// Moments from the leaves up: the leaves sum their particles, then the parents (in reverse
-// preorder, so every child comes first) combine their children's moments about their own
-// centre of mass (the parallel-axis shift of each child's quadrupole). Each cube keeps its
-// centre and grows from its built side just enough to hold what is inside: a leaf its
-// particles, a parent its children's cubes (only once one of them has grown: built children
-// tile their parent).
+// Moments from the leaves up (children follow their parent in preorder, so a reverse pass
+// meets every child first): a leaf sums its particles, a parent combines its children's
+// moments about its own centre of mass (the parallel-axis shift of each child's quadrupole).
+// Each cube keeps its centre and grows from its built side just enough to hold what is
+// inside: a leaf its particles, a parent its children's cubes (only once one of them has
+// grown: built children tile their parent).
 void GravityTree::compute_moments(const std::vector<double>& eps) {
-  if (leaves_.empty())
-    for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n)
-      (nodes_[n].first_child < 0 ? leaves_ : parents_).push_back(n);
-  // What the sums below start from.
-  auto clear = [](TreeNode& node) {
-    node.quadrupole = {};
+  bool loose = false;
+  for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n) {
+    TreeNode& node = nodes_[n];
+    auto& q = node.quadrupole;
+    q = {};
     node.mass = 0.0;
     node.max_softening = 0.0;
     node.side = node.built_side;
-  };
-  bool loose = false;
-  for (const std::int32_t l : leaves_) {
-    TreeNode& node = nodes_[l];
-    clear(node);
-    auto& q = node.quadrupole;
     Vec3 weighted;
-    double reach = 0.0;
-    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-      node.mass += mass_[k];
-      weighted += mass_[k] * pos_[k];
-      node.max_softening = std::max(node.max_softening, eps[static_cast<std::size_t>(k)]);
-      reach = std::max(reach, farthest(pos_[k] - node.centre));
+    double reach = 0.0;  // how far from the centre, along an axis, the node's content extends
+    if (node.first_child < 0) {
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        node.mass += mass_[k];
+        weighted += mass_[k] * pos_[k];
+        node.max_softening = std::max(node.max_softening, eps[static_cast<std::size_t>(k)]);
+        reach = std::max(reach, farthest(pos_[k] - node.centre));
+      }
+      node.side = std::max(node.side, 2.0 * reach);
+      // A massless node still needs a finite position for the distance tests.
+      node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
+      loose = loose || node.side > 2.0 * node.built_side;
+      continue;
     }
-    node.side = std::max(node.side, 2.0 * reach);
-    // A massless node still needs a finite position for the distance tests.
-    node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-    for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
-    loose = loose || node.side > 2.0 * node.built_side;
-  }
-  for (const std::int32_t n : parents_) {
-    TreeNode& node = nodes_[n];
-    clear(node);
-    auto& q = node.quadrupole;
-    Vec3 weighted;
     const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
-    double reach = 0.0;
     bool grown = false;
     for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
       const TreeNode& child = nodes_[c];

@@ -122,7 +122,6 @@ class GravityTree {
   std::vector<double> spline_;     // the sources' spline lengths (2.8 eps)
   std::vector<float> spline_f_;    // the same in float, for the near loop
   std::vector<float> spline_inv_f_;  // 1 / spline_f_
-  std::vector<std::int32_t> leaves_, parents_;  // node indices, each in reverse preorder
   bool loose_ = false;
 };
 
