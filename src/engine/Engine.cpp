@@ -100,7 +100,8 @@ void Engine::rebuild() {
   remove_dissolved();
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
-  space_.rebuild(gas_, dm_, [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); });
+  const ForEach for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); };
+  space_.recut(gas_, dm_, for_each);
   ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
   if (ranks_) assign_owners(measured);
@@ -123,10 +124,16 @@ void Engine::rebuild() {
   ctx_->cover_exceeded = false;
   if (config_.gravity.enabled) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
-    // beside the graph rather than in the step's tree task, where it would hold up every walk.
-    executor_.run_beside([this] { gravity::update_tree(*ctx_); }, [this] { build_graph(); });
+    // beside the neighbour lists and the graph, which read only the cells, rather than in
+    // the step's tree task, where it would hold up every walk.
+    executor_.run_beside([this] { gravity::update_tree(*ctx_); },
+                         [this, &for_each] {
+                           space_.find_neighbours(for_each);
+                           build_graph();
+                         });
     ctx_->tree_current = true;
   } else {
+    space_.find_neighbours(for_each);
     build_graph();
   }
   rebuild_pending_ = false;

@@ -66,7 +66,7 @@ struct CollisionlessParticles {
   }
 
   // Reorder every field by `order` (new index k holds old particle order[k]).
-  void permute(const std::vector<std::size_t>& order);
+  void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {});
 };
 
 }  // namespace fountain

@@ -1,6 +1,7 @@
 #include "particles/GasParticles.hpp"
 #include "particles/CollisionlessParticles.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstring>
 #include <type_traits>
@@ -8,34 +9,46 @@
 namespace fountain {
 
 namespace {
+// Particles per piece of a parallel gather: large enough that a piece costs far more than
+// handing it to a thread, small enough that two threads share the work evenly.
+constexpr std::size_t kReorderPiece = 4096;
+
 // Reorders every field of a store in place through one scratch buffer, sized once for the
 // widest field: fields keep their own allocations, so a rebuild allocates one buffer instead
 // of a new vector per field (the churn of tens of MB per rebuild fragmented the heap and
-// raised the peak memory).
+// raised the peak memory). Each field is gathered and copied back in pieces, in parallel.
 struct Reorder {
   const std::vector<std::size_t>& order;
   std::vector<std::byte>& scratch;
+  const ForEach& for_each;
   template <class T>
   void operator()(std::vector<T>& field) const {
     static_assert(std::is_trivially_copyable_v<T>);
     const std::size_t n = order.size();
     if (scratch.size() < n * sizeof(T)) scratch.resize(n * sizeof(T));
     std::byte* out = scratch.data();
-    for (std::size_t k = 0; k < n; ++k) std::memcpy(out + k * sizeof(T), &field[order[k]], sizeof(T));
+    const std::size_t pieces = (n + kReorderPiece - 1) / kReorderPiece;
+    for_each_or_serial(for_each, pieces, [&](std::size_t p) {
+      const std::size_t end = std::min(n, (p + 1) * kReorderPiece);
+      for (std::size_t k = p * kReorderPiece; k < end; ++k) std::memcpy(out + k * sizeof(T), &field[order[k]], sizeof(T));
+    });
     field.resize(n);
-    if (n > 0) std::memcpy(field.data(), out, n * sizeof(T));
+    for_each_or_serial(for_each, pieces, [&](std::size_t p) {
+      const std::size_t begin = p * kReorderPiece, end = std::min(n, begin + kReorderPiece);
+      std::memcpy(field.data() + begin, out + begin * sizeof(T), (end - begin) * sizeof(T));
+    });
   }
 };
 }  // namespace
 
-void GasParticles::permute(const std::vector<std::size_t>& order) {
+void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each) {
   std::vector<std::byte> scratch;
-  for_each_field(Reorder{order, scratch});
+  for_each_field(Reorder{order, scratch, for_each});
 }
 
-void CollisionlessParticles::permute(const std::vector<std::size_t>& order) {
+void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each) {
   std::vector<std::byte> scratch;
-  for_each_field(Reorder{order, scratch});
+  for_each_field(Reorder{order, scratch, for_each});
 }
 
 }  // namespace fountain

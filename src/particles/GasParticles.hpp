@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/ForEach.hpp"
 #include "core/Vec3.hpp"
 
 namespace fountain {
@@ -105,8 +106,9 @@ struct GasParticles {
   double dynamical_mass(std::size_t i) const { return mass[i] + mass_stars_hidden[i]; }
 
   // Reorder every field by `order` (new index k holds old particle order[k]); an order
-  // shorter than the particle number keeps only the particles it names.
-  void permute(const std::vector<std::size_t>& order);
+  // shorter than the particle number keeps only the particles it names. Pieces of each field
+  // are moved through `for_each` when given.
+  void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {});
 };
 
 }  // namespace fountain

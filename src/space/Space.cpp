@@ -33,6 +33,51 @@ double Space::box_distance(const Cell& a, const Cell& b) const {
   return std::sqrt(d2);
 }
 
+namespace {
+
+// Partitions order[first, first + count) by octant of `mid` (stable, so deterministic) and
+// returns where each octant starts, relative to `first`.
+std::array<std::size_t, 9> partition_octants(const std::vector<Vec3>& pos, std::size_t first, std::size_t count,
+                                             const Vec3& mid, std::vector<std::size_t>& order,
+                                             std::vector<std::size_t>& scratch) {
+  std::array<std::size_t, 9> start{};
+  auto octant = [&](std::size_t i) {
+    const Vec3& x = pos[i];
+    return (x.x >= mid.x ? 4 : 0) + (x.y >= mid.y ? 2 : 0) + (x.z >= mid.z ? 1 : 0);
+  };
+  for (std::size_t k = first; k < first + count; ++k) ++start[octant(order[k]) + 1];
+  for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
+  std::array<std::size_t, 8> fill;
+  for (int o = 0; o < 8; ++o) fill[o] = first + start[o];
+  for (std::size_t k = first; k < first + count; ++k) {
+    const std::size_t i = order[k];
+    scratch[fill[octant(i)]++] = i;
+  }
+  std::copy(scratch.begin() + static_cast<std::ptrdiff_t>(first),
+            scratch.begin() + static_cast<std::ptrdiff_t>(first + count),
+            order.begin() + static_cast<std::ptrdiff_t>(first));
+  return start;
+}
+
+Vec3 octant_corner(const Vec3& lo, const Vec3& half, int o) {
+  return lo + Vec3{(o & 4) ? half.x : 0.0, (o & 2) ? half.y : 0.0, (o & 1) ? half.z : 0.0};
+}
+
+// Orders the particles of a leaf as the octree below it would (without making cells), so that
+// any run of consecutive particles is spatially compact: the SPH loops work in small groups.
+void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t count, const Vec3& lo, const Vec3& width,
+                int depth, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch) {
+  if (count <= 4 || depth >= kMaxDepth) return;
+  const Vec3 half = width * 0.5;
+  const std::array<std::size_t, 9> start = partition_octants(pos, first, count, lo + half, order, scratch);
+  for (int o = 0; o < 8; ++o)
+    if (start[o + 1] > start[o])
+      order_leaf(pos, first + start[o], start[o + 1] - start[o], octant_corner(lo, half, o), half, depth + 1,
+                 order, scratch);
+}
+
+}  // namespace
+
 // Sorting state of one rebuild: the permutation being built for each species.
 struct Space::SortState {
   GasParticles& gas;
@@ -41,6 +86,11 @@ struct Space::SortState {
 };
 
 void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
+  recut(gas, dm, for_each);
+  find_neighbours(for_each);
+}
+
+void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
   ++rebuilds_;
   const std::size_t n = gas.size(), n_dm = dm.size();
   // The box.
@@ -138,8 +188,17 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach
       }
   // Positions are still in the original order: split reads them through the orders.
   for (int t : top_) split(t, st);
-  gas.permute(st.order);
-  dm.permute(st.dm_order);
+  // Each leaf's particles are ordered within its own range of the orders, so leaves go in parallel.
+  std::vector<int> leaf_cells;
+  for (int c = 0; c < static_cast<int>(cells_.size()); ++c)
+    if (cells_[static_cast<std::size_t>(c)].leaf) leaf_cells.push_back(c);
+  for_each_or_serial(for_each, leaf_cells.size(), [&](std::size_t l) {
+    const Cell& cell = cells_[static_cast<std::size_t>(leaf_cells[l])];
+    order_leaf(gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, st.order, st.scratch);
+    order_leaf(dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, st.dm_order, st.dm_scratch);
+  });
+  gas.permute(st.order, for_each);
+  dm.permute(st.dm_order, for_each);
 
   // Leaves, their h_max and cover radii; inner nodes take the largest cover below them.
   leaves_.clear();
@@ -191,64 +250,18 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach
           "use more particles or a smaller neighbour number",
           size_.x, size_.y, size_.z, reach / (1.0 + config_.skin)));
   }
+}
 
+void Space::find_neighbours(const ForEach& for_each) {
   neighbours_.assign(leaves_.size(), {});
   surroundings_.assign(leaves_.size(), {});
   const std::function<void(std::size_t)> lists_of = [this](std::size_t l) {
     if (cells_[static_cast<std::size_t>(leaves_[l])].count == 0) return;
     for (int t : top_) collect_leaves(leaves_[l], t, neighbours_[l], surroundings_[l]);
   };
-  if (for_each) {
-    for_each(leaves_.size(), lists_of);
-  } else {
-    for (std::size_t l = 0; l < leaves_.size(); ++l) lists_of(l);
-  }
+  for_each_or_serial(for_each, leaves_.size(), lists_of);
 }
 
-namespace {
-
-// Partitions order[first, first + count) by octant of `mid` (stable, so deterministic) and
-// returns where each octant starts, relative to `first`.
-std::array<std::size_t, 9> partition_octants(const std::vector<Vec3>& pos, std::size_t first, std::size_t count,
-                                             const Vec3& mid, std::vector<std::size_t>& order,
-                                             std::vector<std::size_t>& scratch) {
-  std::array<std::size_t, 9> start{};
-  auto octant = [&](std::size_t i) {
-    const Vec3& x = pos[i];
-    return (x.x >= mid.x ? 4 : 0) + (x.y >= mid.y ? 2 : 0) + (x.z >= mid.z ? 1 : 0);
-  };
-  for (std::size_t k = first; k < first + count; ++k) ++start[octant(order[k]) + 1];
-  for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
-  std::array<std::size_t, 8> fill;
-  for (int o = 0; o < 8; ++o) fill[o] = first + start[o];
-  for (std::size_t k = first; k < first + count; ++k) {
-    const std::size_t i = order[k];
-    scratch[fill[octant(i)]++] = i;
-  }
-  std::copy(scratch.begin() + static_cast<std::ptrdiff_t>(first),
-            scratch.begin() + static_cast<std::ptrdiff_t>(first + count),
-            order.begin() + static_cast<std::ptrdiff_t>(first));
-  return start;
-}
-
-Vec3 octant_corner(const Vec3& lo, const Vec3& half, int o) {
-  return lo + Vec3{(o & 4) ? half.x : 0.0, (o & 2) ? half.y : 0.0, (o & 1) ? half.z : 0.0};
-}
-
-// Orders the particles of a leaf as the octree below it would (without making cells), so that
-// any run of consecutive particles is spatially compact: the SPH loops work in small groups.
-void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t count, const Vec3& lo, const Vec3& width,
-                int depth, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch) {
-  if (count <= 4 || depth >= kMaxDepth) return;
-  const Vec3 half = width * 0.5;
-  const std::array<std::size_t, 9> start = partition_octants(pos, first, count, lo + half, order, scratch);
-  for (int o = 0; o < 8; ++o)
-    if (start[o + 1] > start[o])
-      order_leaf(pos, first + start[o], start[o + 1] - start[o], octant_corner(lo, half, o), half, depth + 1,
-                 order, scratch);
-}
-
-}  // namespace
 
 void Space::split(int c, SortState& s) {
   const Cell cell = cells_[static_cast<std::size_t>(c)];
@@ -258,11 +271,7 @@ void Space::split(int c, SortState& s) {
     // Keep leaves small against the box so the nearest image of cell centres is that of their boxes.
     for (int k = 0; k < 3; ++k) must_split = must_split || cell.width[k] > 0.25 * size_[k];
   }
-  if (!must_split || cell.depth >= kMaxDepth) {
-    order_leaf(s.gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, s.order, s.scratch);
-    order_leaf(s.dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, s.dm_order, s.dm_scratch);
-    return;
-  }
+  if (!must_split || cell.depth >= kMaxDepth) return;  // a leaf: its particles are ordered later
 
   const std::array<std::size_t, 9> start = partition_octants(s.gas.x, cell.first, cell.count, cell.centre(), s.order, s.scratch);
   const std::array<std::size_t, 9> dm_start =

@@ -5,6 +5,7 @@
 #include <functional>
 #include <vector>
 
+#include "core/ForEach.hpp"
 #include "core/Vec3.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
@@ -24,14 +25,16 @@ class Space {
  public:
   explicit Space(SpaceConfig config) : config_(config) {}
 
-  // Calls fn(k) for k in [0, n), in any order and possibly in parallel.
-  using ForEach = std::function<void(std::size_t n, const std::function<void(std::size_t)>& fn)>;
-
   // Sorts the particles of both species into cells (every field permuted), builds the octree,
-  // the leaves' cover radii and their neighbour lists. Positions are wrapped into a periodic box.
-  // Each leaf's lists are found by one call of `for_each` (serially when it is empty): they
-  // depend only on the cells, so the order of the calls does not matter.
+  // the leaves' cover radii and their neighbour lists: recut, then find_neighbours. Work on
+  // separate leaves (ordering their particles, their lists) and pieces of the permutation go
+  // through `for_each` (serially when it is empty); the result does not depend on their order.
   void rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {});
+  // The first part of rebuild: cells, particle order, cover radii; positions are wrapped into
+  // a periodic box. The neighbour lists are stale until find_neighbours, which reads only the
+  // cells (so the caller may meanwhile work on the particles, as the engine's tree build does).
+  void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {});
+  void find_neighbours(const ForEach& for_each = {});
 
   const std::vector<Cell>& cells() const { return cells_; }
   std::vector<Cell>& cells() { return cells_; }
