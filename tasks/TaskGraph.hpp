@@ -37,6 +37,7 @@ struct Task {
   int ci = -1;          // the cell the task works on (and writes, if `writes` says so)
   int cj = -1;          // the other cell of a pair task, read only
   int writes = -1;      // the one resource (cell) the task writes; -1 for none
+  int part = -1;        // of a job shared out over several tasks of one type: which share
   bool active = true;   // skipped tasks count as done at once
 };
 

@@ -8,6 +8,7 @@
 #include <iostream>
 #include <numbers>
 #include <random>
+#include <thread>
 #include <span>
 #include <sstream>
 #include <string>
@@ -384,6 +385,55 @@ TEST(GravityTree, RefitFollowsMovedParticles) {
 
   EXPECT_THROW(tight.refit(std::span(nudged.x).first(10), std::span(nudged.m).first(10), std::span(nudged.eps).first(10)),
                std::invalid_argument);
+}
+
+// The refit in groups (the engine's tree tasks), groups taken in any order and on two threads
+// at once, is the refit: every node bit for bit. Groups share the particles out evenly.
+TEST(GravityTree, RefitInGroupsIsTheRefit) {
+  const Problem& p = clustered_problem();
+  ParticleSet moved = p.set;
+  std::mt19937_64 rng(78);
+  for (std::size_t i = 0; i < moved.x.size(); ++i)
+    for (int d = 0; d < 3; ++d) moved.x[i][d] += 0.002 * (uniform01(rng) - 0.5);
+  GravityTree whole = p.tree, parts = p.tree;
+  whole.refit(moved.x, moved.m, moved.eps);
+  const auto fetch = [&](std::size_t i) { return GravityTree::RefitSource{moved.x[i], moved.m[i], moved.eps[i]}; };
+  constexpr int k = GravityTree::kRefitGroups;
+  std::thread odd([&] {
+    for (int g = k - 1; g >= 0; --g)
+      if (g % 2 == 1) parts.refit_group(g, fetch);
+  });
+  for (int g = k - 1; g >= 0; --g)
+    if (g % 2 == 0) parts.refit_group(g, fetch);
+  odd.join();
+  parts.finish_refit();
+  ASSERT_EQ(parts.nodes().size(), whole.nodes().size());
+  for (std::size_t n = 0; n < parts.nodes().size(); ++n) {
+    const TreeNode &a = parts.nodes()[n], &b = whole.nodes()[n];
+    ASSERT_EQ(a.side, b.side) << "node " << n;
+    ASSERT_EQ(a.mass, b.mass) << "node " << n;
+    ASSERT_EQ(a.com, b.com) << "node " << n;
+    ASSERT_EQ(a.max_softening, b.max_softening) << "node " << n;
+    ASSERT_EQ(a.quadrupole, b.quadrupole) << "node " << n;
+  }
+  EXPECT_EQ(parts.loose(), whole.loose());
+  std::int64_t total = 0;
+  const auto n = static_cast<std::int64_t>(moved.x.size());
+  for (int g = 0; g < k; ++g) {
+    const std::int64_t c = parts.refit_group_count(g);
+    total += c;
+    EXPECT_LE(c, n / k + n / (2 * k) + 1) << "group " << g;
+    EXPECT_GE(c, n / k - n / (2 * k) - 1) << "group " << g;
+  }
+  EXPECT_EQ(total, n);
+  // A bad source is named.
+  moved.x[123].y = std::nan("");
+  try {
+    for (int g = 0; g < k; ++g) parts.refit_group(g, fetch);
+    FAIL() << "a NaN position was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("source 123 "), std::string::npos) << e.what();
+  }
 }
 
 TEST(GravityTree, BuildAndWalkAreDeterministic) {

@@ -126,7 +126,7 @@ void Engine::rebuild() {
     // The new particle order needs a new gravity tree (its build is serial): it is built
     // beside the neighbour lists and the graph, which read only the cells, rather than in
     // the step's tree task, where it would hold up every walk.
-    executor_.run_beside([this] { gravity::update_tree(*ctx_); },
+    executor_.run_beside([this] { gravity::build_tree(*ctx_); },
                          [this, &for_each] {
                            space_.find_neighbours(for_each);
                            build_graph();
@@ -173,9 +173,19 @@ void Engine::build_graph() {
   std::size_t npairs = 0;
   for (int c : leaves) npairs += space_.neighbours(c).size();
   const bool gravity = config_.gravity.enabled;
-  graph_.reserve(9 * leaves.size() + 1, 3 * npairs + 3 * leaves.size());
-  // One tree per step, from every cell's drifted particles; each cell's walk reads it.
+  const std::size_t refits = gravity ? gravity::GravityTree::kRefitGroups : 0;
+  graph_.reserve(9 * leaves.size() + 3 + refits, 3 * npairs + (3 + refits) * leaves.size());
+  // One tree per step, from every cell's drifted particles, refitted in parts; each cell's
+  // walk reads it.
   gravity_tree_task_ = gravity ? graph_.add(types_.gravity_tree, -1, -1, -1) : -1;
+  refit_tasks_.clear();
+  if (gravity)
+    for (int g = 0; g < gravity::GravityTree::kRefitGroups; ++g) {
+      const int t = graph_.add(types_.gravity_refit, -1, -1, -1);
+      graph_.task(t).part = g;
+      graph_.depends(t, gravity_tree_task_);
+      refit_tasks_.push_back(t);
+    }
   dreaders.reserve(leaves.size());
   freaders.reserve(leaves.size());
   cell_tasks_.assign(ncells, {-1, -1});
@@ -205,7 +215,7 @@ void Engine::build_graph() {
     }
     if (gravity) {
       const int walk = graph_.add(types_.gravity, c, -1, c);
-      graph_.depends(drift[c], gravity_tree_task_);
+      for (int t : refit_tasks_) graph_.depends(drift[c], t);
       graph_.depends(gravity_tree_task_, walk);
     }
     kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
@@ -286,6 +296,11 @@ std::size_t Engine::activate(Phase phase) {
   graph_.set_all_active(false);
   step_tasks_.clear();
   if (gravity) {
+    gravity::plan_tree_update(*ctx_);
+    for (int t : refit_tasks_) {
+      graph_.task(t).active = true;
+      step_tasks_.push_back(t);
+    }
     graph_.task(gravity_tree_task_).active = true;
     step_tasks_.push_back(gravity_tree_task_);
   }
@@ -365,7 +380,8 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.density) hydro::density(ctx, t.ci);
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
     else if (t.type == T.force) hydro::force(ctx, t.ci);
-    else if (t.type == T.gravity_tree) gravity::update_tree(ctx);
+    else if (t.type == T.gravity_refit) gravity::refit_tree_group(ctx, t.part);
+    else if (t.type == T.gravity_tree) gravity::finish_tree(ctx);
     else if (t.type == T.gravity) gravity::walk_cell(ctx, t.ci);
     else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);

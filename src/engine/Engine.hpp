@@ -178,6 +178,7 @@ class Engine {
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
   int gravity_tree_task_ = -1;
+  std::vector<int> refit_tasks_;
   int star_formation_done_task_ = -1, feedback_apply_task_ = -1;
   std::unique_ptr<starformation::StarFormationState> sf_;
   starformation::StarFormationTally sf_total_, sf_last_step_;

@@ -35,12 +35,15 @@ struct StepContext {
   // below half in one kick; with it the cooling task's implicit rate keeps u positive.
   const cooling::RadiativeCooling* cooling = nullptr;
 
-  // This step's gravity tree: built after each recut of the cells, refitted by the tree task
-  // in the steps between.
+  // This step's gravity tree: built after each recut of the cells, refitted by the tree
+  // tasks in the steps between.
   std::unique_ptr<gravity::GravityTree> tree;
   // Set when the tree was built at the particles' present positions (at a rebuild, before the
-  // step's graph): the step's tree task then has nothing to do.
+  // step's graph): the step's tree tasks then have nothing to do.
   bool tree_current = false;
+  // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
+  enum class TreeUpdate { keep, refit, build };
+  TreeUpdate tree_update = TreeUpdate::build;
 
   IntegerTime ti_current = 0;
 

@@ -5,7 +5,7 @@
 namespace fountain {
 
 struct TaskTypes {
-  int drift, density, ghost, force, gravity_tree, gravity, kick_close, timestep,
+  int drift, density, ghost, force, gravity_refit, gravity_tree, gravity, kick_close, timestep,
       cooling, kick_open, star_formation, star_formation_done, feedback_search, feedback_apply, send, recv;
   tasks::TaskTypeRegistry registry;
 
@@ -15,6 +15,9 @@ struct TaskTypes {
     density = registry.add({"density", "", "hydro"});
     ghost = registry.add({"ghost", "", "hydro"});
     force = registry.add({"force", "", "hydro"});
+    // The tree is refitted in parts (Task::part: a group of its subtrees), then finished
+    // above them (or built, when a refit will not do).
+    gravity_refit = registry.add({"gravity", "refit", "gravity"});
     gravity_tree = registry.add({"gravity", "tree", "gravity"});
     gravity = registry.add({"gravity", "walk", "gravity"});
     kick_close = registry.add({"kick", "close", "integration"});

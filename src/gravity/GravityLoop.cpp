@@ -4,11 +4,7 @@
 
 namespace fountain::gravity {
 
-void update_tree(StepContext& ctx) {
-  if (ctx.tree_current) {
-    ctx.tree_current = false;  // the next call follows moved particles
-    return;
-  }
+void build_tree(StepContext& ctx) {
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
@@ -27,8 +23,42 @@ void update_tree(StepContext& ctx) {
     m.push_back(dm.mass[i]);
     eps.push_back(ctx.gravity.softening(dm.species[i]));
   }
-  if (ctx.tree && !ctx.tree->loose() && ctx.tree->size() == n) ctx.tree->refit(x, m, eps);
-  else ctx.tree = std::make_unique<GravityTree>(x, m, eps);
+  ctx.tree = std::make_unique<GravityTree>(x, m, eps);
+}
+
+void plan_tree_update(StepContext& ctx) {
+  using U = StepContext::TreeUpdate;
+  if (ctx.tree_current) {
+    ctx.tree_update = U::keep;
+    ctx.tree_current = false;  // the next run follows moved particles
+  } else {
+    const bool fits = ctx.tree && !ctx.tree->loose() && ctx.tree->size() == ctx.gas.size() + ctx.dm.size();
+    ctx.tree_update = fits ? U::refit : U::build;
+  }
+}
+
+void refit_tree_group(StepContext& ctx, int g) {
+  if (ctx.tree_update != StepContext::TreeUpdate::refit) return;
+  const GasParticles& gas = ctx.gas;
+  const CollisionlessParticles& dm = ctx.dm;
+  const std::size_t n_gas = gas.size();
+  const double eps_gas = ctx.gravity.softening_gas;
+  ctx.tree->refit_group(g, [&](std::size_t i) {
+    if (i < n_gas) return GravityTree::RefitSource{gas.x[i], gas.dynamical_mass(i), eps_gas};
+    const std::size_t j = i - n_gas;
+    return GravityTree::RefitSource{dm.x[j], dm.mass[j], ctx.gravity.softening(dm.species[j])};
+  });
+}
+
+void finish_tree(StepContext& ctx) {
+  if (ctx.tree_update == StepContext::TreeUpdate::refit) ctx.tree->finish_refit();
+  else if (ctx.tree_update == StepContext::TreeUpdate::build) build_tree(ctx);
+}
+
+void update_tree(StepContext& ctx) {
+  plan_tree_update(ctx);
+  for (int g = 0; g < GravityTree::kRefitGroups; ++g) refit_tree_group(ctx, g);
+  finish_tree(ctx);
 }
 
 namespace {

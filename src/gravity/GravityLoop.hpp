@@ -4,11 +4,22 @@
 
 namespace fountain::gravity {
 
-// Brings ctx.tree to every particle's drifted position: gas (its gravitating mass, at the gas
-// softening) and dark matter, numbered gas first, then dark matter. The tree is refitted
-// while it has the same sources in the same order (the engine drops it when the cells are
-// recut, which reorders particles and adds or removes stars) and has not grown loose;
-// otherwise it is built anew.
+// The tree's sources are every particle at its drifted position: gas (its gravitating mass,
+// at the gas softening) and dark matter, numbered gas first, then dark matter.
+
+// Builds ctx.tree anew from every particle.
+void build_tree(StepContext& ctx);
+
+// Chooses, before a graph run, what its tree tasks do (ctx.tree_update): nothing when the
+// tree was built at this step's rebuild; a refit while the tree has the same sources in the
+// same order (the engine drops it when the cells are recut, which reorders particles and adds
+// or removes stars) and has not grown loose; otherwise a build.
+void plan_tree_update(StepContext& ctx);
+// The tree tasks: the refit of group g of the tree's subtrees (after every drift), then the
+// finish (after every group: the nodes above them, or the whole build).
+void refit_tree_group(StepContext& ctx, int g);
+void finish_tree(StepContext& ctx);
+// All of it in one call: plan_tree_update, every group, finish_tree.
 void update_tree(StepContext& ctx);
 
 // Accelerations and potentials of the active particles of leaf `c` from the tree (gather

@@ -32,6 +32,13 @@ int octant(const Vec3& x, const Vec3& centre) {
 
 double farthest(const Vec3& d) { return std::max({std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)}); }
 
+void check_source(std::size_t i, const Vec3& x, double mass, double softening) {
+  if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z) || !std::isfinite(mass) || mass < 0.0 ||
+      !std::isfinite(softening) || softening < 0.0)
+    throw std::invalid_argument("GravityTree: source " + std::to_string(i) +
+                                " has a non-finite position or a negative/non-finite mass or softening");
+}
+
 void check_inputs(std::span<const Vec3> positions, std::span<const double> masses,
                   std::span<const double> softenings, const TreeConfig& config) {
   if (masses.size() != positions.size() || softenings.size() != positions.size())
@@ -41,13 +48,7 @@ void check_inputs(std::span<const Vec3> positions, std::span<const double> masse
   if (config.max_leaf_size < 1) throw std::invalid_argument("GravityTree: max_leaf_size must be >= 1");
   if (config.periodic)
     throw std::invalid_argument("GravityTree: periodic boundaries need TreePM, not implemented yet");
-  for (std::size_t i = 0; i < positions.size(); ++i) {
-    const Vec3& x = positions[i];
-    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z) || !std::isfinite(masses[i]) ||
-        masses[i] < 0.0 || !std::isfinite(softenings[i]) || softenings[i] < 0.0)
-      throw std::invalid_argument("GravityTree: source " + std::to_string(i) +
-                                  " has a non-finite position or a negative/non-finite mass or softening");
-  }
+  // Each source is checked as it is stored (store_source).
 }
 
 }  // namespace
@@ -80,41 +81,104 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
     if (node.next == static_cast<std::int32_t>(nodes_.size())) node.next = -1;
 
   for (std::int32_t k = 0; k < n; ++k) index_[k] = items[static_cast<std::size_t>(k)].index;
-  std::vector<double> eps;
-  load_sources(positions, masses, softenings, eps);
-  compute_moments(eps);
+  load_sources(positions, masses, softenings);
+  compute_moments();
+  plan_refit_groups();
 }
 
 void GravityTree::refit(std::span<const Vec3> positions, std::span<const double> masses,
                         std::span<const double> softenings) {
-  check_inputs(positions, masses, softenings, config_);
+  if (masses.size() != positions.size() || softenings.size() != positions.size())
+    throw std::invalid_argument("GravityTree::refit: positions, masses and softenings differ in length");
   if (positions.size() != index_.size())
     throw std::invalid_argument("GravityTree::refit: " + std::to_string(positions.size()) + " sources for a tree of " +
                                 std::to_string(index_.size()));
-  std::vector<double> eps;
-  load_sources(positions, masses, softenings, eps);
-  compute_moments(eps);
+  const auto fetch = [&](std::size_t i) { return RefitSource{positions[i], masses[i], softenings[i]}; };
+  for (int g = 0; g < kRefitGroups; ++g) refit_group(g, fetch);
+  finish_refit();
 }
 
 // The sources in tree order, with what the walk derives from their softenings.
 void GravityTree::load_sources(std::span<const Vec3> positions, std::span<const double> masses,
-                               std::span<const double> softenings, std::vector<double>& eps) {
+                               std::span<const double> softenings) {
   const std::size_t n = index_.size();
   pos_.resize(n);
   mass_.resize(n);
   spline_.resize(n);
   spline_f_.resize(n);
   spline_inv_f_.resize(n);
-  eps.resize(n);
+  eps_.resize(n);
   for (std::size_t k = 0; k < n; ++k) {
     const auto i = static_cast<std::size_t>(index_[k]);
-    pos_[k] = positions[i];
-    mass_[k] = masses[i];
-    eps[k] = softenings[i];
-    spline_[k] = spline_length(eps[k]);
-    spline_f_[k] = static_cast<float>(spline_[k]);
-    spline_inv_f_[k] = 1.0f / spline_f_[k];
+    store_source(static_cast<std::int32_t>(k), static_cast<std::int32_t>(i), {positions[i], masses[i], softenings[i]});
   }
+}
+
+void GravityTree::store_source(std::int32_t k, std::int32_t i, const RefitSource& s) {
+  check_source(static_cast<std::size_t>(i), s.x, s.mass, s.softening);
+  const auto u = static_cast<std::size_t>(k);
+  pos_[u] = s.x;
+  mass_[u] = s.mass;
+  eps_[u] = s.softening;
+  spline_[u] = spline_length(s.softening);
+  spline_f_[u] = static_cast<float>(spline_[u]);
+  spline_inv_f_[u] = 1.0f / spline_f_[u];
+}
+
+// Subtrees of at most 1/(2 kRefitGroups) of the particles become pieces (a leaf is one
+// whatever its size); the nodes above them are refitted last. Pieces are dealt to groups in
+// preorder, a group closing once it holds its share of the particles.
+void GravityTree::plan_refit_groups() {
+  pieces_.clear();
+  top_nodes_.clear();
+  group_start_.fill(0);
+  group_loose_.fill(false);
+  if (nodes_.empty()) return;
+  const std::int64_t n = static_cast<std::int64_t>(index_.size());
+  const std::int64_t piece_size = std::max<std::int64_t>(1, n / (2 * kRefitGroups));
+  for (std::int32_t k = 0; k < static_cast<std::int32_t>(nodes_.size());) {
+    const TreeNode& node = nodes_[static_cast<std::size_t>(k)];
+    if (node.first_child < 0 || node.count <= piece_size) {
+      pieces_.push_back(k);
+      k = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;  // past its subtree
+    } else {
+      top_nodes_.push_back(k);
+      ++k;  // into its children
+    }
+  }
+  std::int64_t dealt = 0;
+  int g = 0;
+  for (std::size_t p = 0; p < pieces_.size(); ++p) {
+    dealt += nodes_[static_cast<std::size_t>(pieces_[p])].count;
+    while (g < kRefitGroups - 1 && dealt * kRefitGroups >= n * (g + 1))
+      group_start_[static_cast<std::size_t>(++g)] = static_cast<std::int32_t>(p + 1);
+  }
+  while (g < kRefitGroups) group_start_[static_cast<std::size_t>(++g)] = static_cast<std::int32_t>(pieces_.size());
+}
+
+bool GravityTree::refit_pieces_of(int g) {
+  bool loose = false;
+  for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p) {
+    const std::int32_t root = pieces_[static_cast<std::size_t>(p)];
+    const TreeNode& node = nodes_[static_cast<std::size_t>(root)];
+    const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
+    for (std::int32_t k = end - 1; k >= root; --k) loose = node_moments(k) || loose;
+  }
+  return loose;
+}
+
+std::int64_t GravityTree::refit_group_count(int g) const {
+  std::int64_t count = 0;
+  for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p)
+    count += nodes_[static_cast<std::size_t>(pieces_[static_cast<std::size_t>(p)])].count;
+  return count;
+}
+
+void GravityTree::finish_refit() {
+  bool loose = false;
+  for (bool l : group_loose_) loose = loose || l;
+  for (auto t = top_nodes_.rbegin(); t != top_nodes_.rend(); ++t) loose = node_moments(*t) || loose;
+  loose_ = loose;
 }
 
 // Sequential depth-first build of the topology: nodes come out in preorder, so a node's first
@@ -162,52 +226,52 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
 // Each cube keeps its centre and grows from its built side just enough to hold what is
 // inside: a leaf its particles, a parent its children's cubes (only once one of them has
 // grown: built children tile their parent).
-void GravityTree::compute_moments(const std::vector<double>& eps) {
+void GravityTree::compute_moments() {
   bool loose = false;
-  for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n) {
-    TreeNode& node = nodes_[n];
-    auto& q = node.quadrupole;
-    q = {};
-    node.mass = 0.0;
-    node.max_softening = 0.0;
-    node.side = node.built_side;
-    Vec3 weighted;
-    double reach = 0.0;  // how far from the centre, along an axis, the node's content extends
-    if (node.first_child < 0) {
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        node.mass += mass_[k];
-        weighted += mass_[k] * pos_[k];
-        node.max_softening = std::max(node.max_softening, eps[static_cast<std::size_t>(k)]);
-        reach = std::max(reach, farthest(pos_[k] - node.centre));
-      }
-      node.side = std::max(node.side, 2.0 * reach);
-      // A massless node still needs a finite position for the distance tests.
-      node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
-      loose = loose || node.side > 2.0 * node.built_side;
-      continue;
-    }
-    const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
-    bool grown = false;
-    for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
-      const TreeNode& child = nodes_[c];
-      node.mass += child.mass;
-      weighted += child.mass * child.com;
-      node.max_softening = std::max(node.max_softening, child.max_softening);
-      reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
-      grown = grown || child.side != child.built_side;
-    }
-    // The margin covers the rounding of the sum above: a larger cube only opens more.
-    if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
-    node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-    for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
-      const TreeNode& child = nodes_[c];
-      for (int m = 0; m < 6; ++m) q[m] += child.quadrupole[m];
-      add_point_quadrupole(q, child.mass, child.com - node.com);
-    }
-    loose = loose || node.side > 2.0 * node.built_side;
-  }
+  for (auto n = static_cast<std::int32_t>(nodes_.size()) - 1; n >= 0; --n) loose = node_moments(n) || loose;
   loose_ = loose;
 }
 
+bool GravityTree::node_moments(std::int32_t n) {
+  TreeNode& node = nodes_[static_cast<std::size_t>(n)];
+  auto& q = node.quadrupole;
+  q = {};
+  node.mass = 0.0;
+  node.max_softening = 0.0;
+  node.side = node.built_side;
+  Vec3 weighted;
+  double reach = 0.0;  // how far from the centre, along an axis, the node's content extends
+  if (node.first_child < 0) {
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+      node.mass += mass_[k];
+      weighted += mass_[k] * pos_[k];
+      node.max_softening = std::max(node.max_softening, eps_[static_cast<std::size_t>(k)]);
+      reach = std::max(reach, farthest(pos_[k] - node.centre));
+    }
+    node.side = std::max(node.side, 2.0 * reach);
+    // A massless node still needs a finite position for the distance tests.
+    node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
+    return node.side > 2.0 * node.built_side;
+  }
+  const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
+  bool grown = false;
+  for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
+    const TreeNode& child = nodes_[c];
+    node.mass += child.mass;
+    weighted += child.mass * child.com;
+    node.max_softening = std::max(node.max_softening, child.max_softening);
+    reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
+    grown = grown || child.side != child.built_side;
+  }
+  // The margin covers the rounding of the sum above: a larger cube only opens more.
+  if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
+  node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
+  for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
+    const TreeNode& child = nodes_[c];
+    for (int m = 0; m < 6; ++m) q[m] += child.quadrupole[m];
+    add_point_quadrupole(q, child.mass, child.com - node.com);
+  }
+  return node.side > 2.0 * node.built_side;
+}
 }  // namespace fountain::gravity

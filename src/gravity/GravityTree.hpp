@@ -82,6 +82,32 @@ class GravityTree {
   // more than a fresh tree would, and the caller should build anew.
   bool loose() const { return loose_; }
 
+  // The same refit in parts, so that tasks can share it out: at its build the tree deals its
+  // subtrees into kRefitGroups groups of about equal particle count. refit_group(g, fetch)
+  // for every g (in any order, at once from different threads), then finish_refit() for the
+  // nodes above them; the result is refit()'s, bit for bit. fetch(i) gives source i as a
+  // RefitSource; a source that is not finite, or has a negative mass or softening, throws.
+  static constexpr int kRefitGroups = 8;
+  struct RefitSource {
+    Vec3 x;
+    double mass;
+    double softening;
+  };
+  template <class Fetch>
+  void refit_group(int g, const Fetch& fetch) {
+    for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p) {
+      const TreeNode& root = nodes_[static_cast<std::size_t>(pieces_[static_cast<std::size_t>(p)])];
+      for (std::int32_t k = root.first; k < root.first + root.count; ++k) {
+        const std::int32_t i = index_[static_cast<std::size_t>(k)];
+        store_source(k, i, fetch(static_cast<std::size_t>(i)));
+      }
+    }
+    group_loose_[static_cast<std::size_t>(g)] = refit_pieces_of(g);
+  }
+  void finish_refit();
+  // Particles in refit group g.
+  std::int64_t refit_group_count(int g) const;
+
   GravityResult accelerate(const GravityTarget& target, const WalkConfig& config) const;
 
   // The same for many targets (an engine task passes its cell's active particles): they are
@@ -106,8 +132,17 @@ class GravityTree {
   void build(std::int32_t first, std::int32_t count, const Vec3& centre, double side, int depth,
              std::vector<SortItem>& items, std::vector<SortItem>& scratch);
   void load_sources(std::span<const Vec3> positions, std::span<const double> masses,
-                    std::span<const double> softenings, std::vector<double>& eps);
-  void compute_moments(const std::vector<double>& eps);
+                    std::span<const double> softenings);
+  // Source i (of the caller's numbering) into tree position k, checked.
+  void store_source(std::int32_t k, std::int32_t i, const RefitSource& s);
+  void compute_moments();
+  // The moments and cube of one node from its particles or its children's; true if the
+  // cube has grown past twice its built side.
+  bool node_moments(std::int32_t n);
+  // The refit parts: subtrees whose roots are pieces_ (in preorder), group g holding
+  // pieces [group_start_[g], group_start_[g+1]); the nodes above them are top_nodes_.
+  void plan_refit_groups();
+  bool refit_pieces_of(int g);
 
   struct Group;
   struct InteractionList;
@@ -122,6 +157,10 @@ class GravityTree {
   std::vector<double> spline_;     // the sources' spline lengths (2.8 eps)
   std::vector<float> spline_f_;    // the same in float, for the near loop
   std::vector<float> spline_inv_f_;  // 1 / spline_f_
+  std::vector<double> eps_;          // the sources' softenings
+  std::vector<std::int32_t> pieces_, top_nodes_;
+  std::array<std::int32_t, kRefitGroups + 1> group_start_{};
+  std::array<bool, kRefitGroups> group_loose_{};
   bool loose_ = false;
 };
 
