@@ -55,12 +55,6 @@ void finish_tree(StepContext& ctx) {
   else if (ctx.tree_update == StepContext::TreeUpdate::build) build_tree(ctx);
 }
 
-void update_tree(StepContext& ctx) {
-  plan_tree_update(ctx);
-  for (int g = 0; g < GravityTree::kRefitGroups; ++g) refit_tree_group(ctx, g);
-  finish_tree(ctx);
-}
-
 namespace {
 double old_acceleration(const Vec3& a) {
   const double a2 = dot(a, a);

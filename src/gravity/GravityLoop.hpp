@@ -19,8 +19,6 @@ void plan_tree_update(StepContext& ctx);
 // finish (after every group: the nodes above them, or the whole build).
 void refit_tree_group(StepContext& ctx, int g);
 void finish_tree(StepContext& ctx);
-// All of it in one call: plan_tree_update, every group, finish_tree.
-void update_tree(StepContext& ctx);
 
 // Accelerations and potentials of the active particles of leaf `c` from the tree (gather
 // only: writes nothing but c's particles). A particle with no previous acceleration gets the
