@@ -88,8 +88,7 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
 
 void GravityTree::refit(std::span<const Vec3> positions, std::span<const double> masses,
                         std::span<const double> softenings) {
-  if (masses.size() != positions.size() || softenings.size() != positions.size())
-    throw std::invalid_argument("GravityTree::refit: positions, masses and softenings differ in length");
+  check_inputs(positions, masses, softenings, config_);
   if (positions.size() != index_.size())
     throw std::invalid_argument("GravityTree::refit: " + std::to_string(positions.size()) + " sources for a tree of " +
                                 std::to_string(index_.size()));
@@ -156,14 +155,11 @@ void GravityTree::plan_refit_groups() {
   while (g < kRefitGroups) group_start_[static_cast<std::size_t>(++g)] = static_cast<std::int32_t>(pieces_.size());
 }
 
-bool GravityTree::refit_pieces_of(int g) {
+bool GravityTree::piece_moments(std::int32_t root) {
+  const std::int32_t next = nodes_[static_cast<std::size_t>(root)].next;
+  const std::int32_t end = next < 0 ? static_cast<std::int32_t>(nodes_.size()) : next;
   bool loose = false;
-  for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p) {
-    const std::int32_t root = pieces_[static_cast<std::size_t>(p)];
-    const TreeNode& node = nodes_[static_cast<std::size_t>(root)];
-    const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
-    for (std::int32_t k = end - 1; k >= root; --k) loose = node_moments(k) || loose;
-  }
+  for (std::int32_t k = end - 1; k >= root; --k) loose = node_moments(k) || loose;
   return loose;
 }
 

@@ -95,14 +95,17 @@ class GravityTree {
   };
   template <class Fetch>
   void refit_group(int g, const Fetch& fetch) {
+    bool loose = false;
     for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p) {
-      const TreeNode& root = nodes_[static_cast<std::size_t>(pieces_[static_cast<std::size_t>(p)])];
-      for (std::int32_t k = root.first; k < root.first + root.count; ++k) {
+      const std::int32_t root = pieces_[static_cast<std::size_t>(p)];
+      const TreeNode& node = nodes_[static_cast<std::size_t>(root)];
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const std::int32_t i = index_[static_cast<std::size_t>(k)];
         store_source(k, i, fetch(static_cast<std::size_t>(i)));
       }
+      loose = piece_moments(root) || loose;
     }
-    group_loose_[static_cast<std::size_t>(g)] = refit_pieces_of(g);
+    group_loose_[static_cast<std::size_t>(g)] = loose;
   }
   void finish_refit();
   // Particles in refit group g.
@@ -142,7 +145,8 @@ class GravityTree {
   // The refit parts: subtrees whose roots are pieces_ (in preorder), group g holding
   // pieces [group_start_[g], group_start_[g+1]); the nodes above them are top_nodes_.
   void plan_refit_groups();
-  bool refit_pieces_of(int g);
+  // Moments of every node of the subtree rooted at `root`; true if one grew loose.
+  bool piece_moments(std::int32_t root);
 
   struct Group;
   struct InteractionList;

@@ -188,22 +188,25 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
       }
   // Positions are still in the original order: split reads them through the orders.
   for (int t : top_) split(t, st);
-  // Each leaf's particles are ordered within its own range of the orders, so leaves go in parallel.
-  std::vector<int> leaf_cells;
+  // The leaves that hold particles (only the cells are needed for that).
+  leaves_.clear();
+  leaf_slot_.assign(cells_.size(), -1);
   for (int c = 0; c < static_cast<int>(cells_.size()); ++c)
-    if (cells_[static_cast<std::size_t>(c)].leaf) leaf_cells.push_back(c);
-  for_each_or_serial(for_each, leaf_cells.size(), [&](std::size_t l) {
-    const Cell& cell = cells_[static_cast<std::size_t>(leaf_cells[l])];
+    if (cells_[static_cast<std::size_t>(c)].leaf &&
+        cells_[static_cast<std::size_t>(c)].count + cells_[static_cast<std::size_t>(c)].dm_count > 0) {
+      leaf_slot_[static_cast<std::size_t>(c)] = static_cast<int>(leaves_.size());
+      leaves_.push_back(c);
+    }
+  // Each leaf's particles are ordered within its own range of the orders, so leaves go in parallel.
+  for_each_or_serial(for_each, leaves_.size(), [&](std::size_t l) {
+    const Cell& cell = cells_[static_cast<std::size_t>(leaves_[l])];
     order_leaf(gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, st.order, st.scratch);
     order_leaf(dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, st.dm_order, st.dm_scratch);
   });
   gas.permute(st.order, for_each);
   dm.permute(st.dm_order, for_each);
 
-  // Leaves, their h_max and cover radii; inner nodes take the largest cover below them.
-  leaves_.clear();
-  leaf_slot_.assign(cells_.size(), -1);
-  double v_max_all = 0.0;
+  // The leaves' h_max and cover radii; inner nodes take the largest cover below them.
   for (int c = static_cast<int>(cells_.size()) - 1; c >= 0; --c) {
     Cell& cell = cells_[static_cast<std::size_t>(c)];
     cell.dx_max = 0.0;
@@ -216,7 +219,6 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
         cell.v_max = std::max(cell.v_max, norm(gas.v_full[i]));
       }
       cell.r_cover = (1.0 + config_.skin) * cell.h_max;
-      v_max_all = std::max(v_max_all, cell.v_max);
     } else {
       cell.r_cover = 0.0;
       cell.h_max = 0.0;
@@ -227,12 +229,6 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
         }
     }
   }
-  for (int c = 0; c < static_cast<int>(cells_.size()); ++c)
-    if (cells_[static_cast<std::size_t>(c)].leaf &&
-        cells_[static_cast<std::size_t>(c)].count + cells_[static_cast<std::size_t>(c)].dm_count > 0) {
-      leaf_slot_[static_cast<std::size_t>(c)] = static_cast<int>(leaves_.size());
-      leaves_.push_back(c);
-    }
 
   half_ = size_ * 0.5;
   if (config_.periodic) {
