@@ -71,6 +71,7 @@ GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double
   // A hair of margin keeps particles on the upper faces inside the cube after rounding.
   side = side > 0.0 ? side * (1.0 + 1e-9) : 1.0;
   const Vec3 centre = 0.5 * (lo + hi);
+  length_unit_ = std::ldexp(1.0, std::ilogb(side));
 
   // Partitioned with their positions beside their indices, so no pass reads through an index.
   std::vector<SortItem> items(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
@@ -120,7 +121,7 @@ void GravityTree::store_source(std::int32_t k, std::int32_t i, const RefitSource
   mass_[u] = s.mass;
   eps_[u] = s.softening;
   spline_[u] = spline_length(s.softening);
-  spline_f_[u] = static_cast<float>(spline_[u]);
+  spline_f_[u] = static_cast<float>(spline_[u] / length_unit_);
   spline_inv_f_[u] = 1.0f / spline_f_[u];
 }
 

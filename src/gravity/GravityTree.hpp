@@ -159,7 +159,11 @@ class GravityTree {
   std::vector<Vec3> pos_;            // sources in tree order
   std::vector<double> mass_;
   std::vector<double> spline_;     // the sources' spline lengths (2.8 eps)
-  std::vector<float> spline_f_;    // the same in float, for the near loop
+  // The walk's float loops measure lengths in this unit: a power of two near the root's side
+  // at build, so that scaling by it is exact and float's exponent range covers the
+  // separations whatever the internal unit of length (cm would underflow 1/r^3 in float).
+  double length_unit_ = 1.0;
+  std::vector<float> spline_f_;      // spline_ in float and in length_unit_, for the near loop
   std::vector<float> spline_inv_f_;  // 1 / spline_f_
   std::vector<double> eps_;          // the sources' softenings
   std::vector<std::int32_t> pieces_, top_nodes_;

@@ -19,15 +19,19 @@ constexpr int kGroupSize = GravityTree::kGroupSize;
 
 struct GravityTree::Group {
   int n = 0;
-  double x[kGroupSize], y[kGroupSize], z[kGroupSize];
   double ax[kGroupSize], ay[kGroupSize], az[kGroupSize], pot[kGroupSize];
-  // For the near loop, in float and padded to 8 or 16 lanes: positions relative to `centre`,
-  // spline lengths and their inverses, and the targets' source indices (-1 in the padding)
-  // as two exact floats (a loop mixing int and float lanes does not vectorise).
+  // For the float loops, padded to 8 or 16 lanes: positions relative to `centre` and spline
+  // lengths (both in units of the tree's length_unit_) and their inverses, and the targets'
+  // source indices (-1 in the padding) as two exact floats (a loop mixing int and float lanes
+  // does not vectorise).
   float xr[kGroupSize], yr[kGroupSize], zr[kGroupSize], spline[kGroupSize], spline_inv[kGroupSize];
   float self_hi[kGroupSize], self_lo[kGroupSize];
   int own[kGroupSize];    // 1 if the target's own particle is on the near list (not an interaction)
   Vec3 centre, half;      // the box around the targets' positions
+  // The float loops' unit of acceleration: a power of two near the whole tree's G M / unit^2,
+  // so that accelerations, and the quadrupole products on the way, stay far from float's
+  // subnormals and overflow whatever the unit system.
+  double accel_unit = 1.0;
   double h_max = 0.0;     // the largest target spline length
   double a_crit = 0.0;    // alpha_force times the smallest |a_old|
   bool relative = true;   // false if any target lacks |a_old|: Barnes-Hut for the group
@@ -114,44 +118,59 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   }
 }
 
-// The evaluation repeats node_field's and softened_pair's arithmetic operation by operation
-// (tests compare them bit for bit), written over the group's targets so the loops vectorise.
-// Each target sums its list in list order: nodes, far particles, near particles.
+// Every list is evaluated in float over 8 or 16 lanes (the group padded with copies that are
+// no particle), twice the lanes of double, with lengths relative to the group's centre in
+// units of length_unit_ and accelerations in units of g.accel_unit (powers of two, so the
+// scalings are exact, chosen so that float's exponent range holds whatever the unit system). Each list sums in float and is
+// added to the double totals once per group: nodes and far particles, then near particles.
+// Errors: ~1e-7 per interaction for nodes and far particles, up to a few 1e-6 for near pairs,
+// far below the walk's ~1e-3 (docs/gravity.md).
 FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const {
   const int nt = g.n;
+  const int lanes = nt <= 8 ? 8 : kGroupSize;
+  const double unit_inv = 1.0 / length_unit_;
+  // A source's G m in units of length^2 x acceleration (a quadrupole's G Q in length^4 x
+  // acceleration); potentials come out in units of length x acceleration.
+  const double gm_scale = unit_inv * unit_inv / g.accel_unit;
+  const double q_scale = gm_scale * unit_inv * unit_inv;
+  const double pot_unit = length_unit_ * g.accel_unit;
   const double G = config.G;
   const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
-  // Without the branch on the expansion order inside, the loop over targets vectorises.
+  float ax[kGroupSize] = {}, ay[kGroupSize] = {}, az[kGroupSize] = {}, pot[kGroupSize] = {};
+  // node_field's arithmetic over the group's targets; without the branch on the expansion
+  // order inside, the loop over targets vectorises.
   auto nodes = [&]<bool kQuadrupole>() {
     for (const std::int32_t k : list.nodes) {
       const TreeNode& node = nodes_[k];
-      const double cx = node.com.x, cy = node.com.y, cz = node.com.z;
-      const double mono_a = -G * node.mass, mono_p = -G * node.mass;  // times the split's factors (one today)
-      const auto& q = node.quadrupole;
-      for (int t = 0; t < nt; ++t) {
-        const double dx = g.x[t] - cx, dy = g.y[t] - cy, dz = g.z[t] - cz;
-        const double r2 = dx * dx + dy * dy + dz * dz;
-        const double r_inv = 1.0 / std::sqrt(r2);
-        const double r2_inv = r_inv * r_inv;
-        const double r3_inv = r_inv * r2_inv;
-        const double s = mono_a * r3_inv;
-        double fx = s * dx, fy = s * dy, fz = s * dz, fp = mono_p * r_inv;
+      const float cx = static_cast<float>((node.com.x - g.centre.x) * unit_inv),
+                  cy = static_cast<float>((node.com.y - g.centre.y) * unit_inv),
+                  cz = static_cast<float>((node.com.z - g.centre.z) * unit_inv);
+      const float gm = static_cast<float>(G * node.mass * gm_scale);
+      float q[6];
+      for (int i = 0; i < 6; ++i) q[i] = static_cast<float>(G * node.quadrupole[i] * q_scale);
+      for (int t = 0; t < lanes; ++t) {
+        const float dx = g.xr[t] - cx, dy = g.yr[t] - cy, dz = g.zr[t] - cz;
+        const float r2 = dx * dx + dy * dy + dz * dz;
+        const float r_inv = 1.0f / std::sqrt(r2);
+        const float r2_inv = r_inv * r_inv;
+        const float r3_inv = r_inv * r2_inv;
+        const float s = gm * r3_inv;
+        float fx = -s * dx, fy = -s * dy, fz = -s * dz, fp = -gm * r_inv;
         if constexpr (kQuadrupole) {
-          const double r5_inv = r3_inv * r2_inv;
-          const double qx = q[0] * dx + q[3] * dy + q[4] * dz, qy = q[3] * dx + q[1] * dy + q[5] * dz,
-                       qz = q[4] * dx + q[5] * dy + q[2] * dz;
-          const double dqd = dx * qx + dy * qy + dz * qz;
-          const double c = -2.5 * dqd * r2_inv;
-          const double w = G * r5_inv;
-          fx += w * (qx + c * dx);
-          fy += w * (qy + c * dy);
-          fz += w * (qz + c * dz);
-          fp -= G * 0.5 * dqd * r5_inv;
+          const float r5_inv = r3_inv * r2_inv;
+          const float qx = q[0] * dx + q[3] * dy + q[4] * dz, qy = q[3] * dx + q[1] * dy + q[5] * dz,
+                      qz = q[4] * dx + q[5] * dy + q[2] * dz;
+          const float dqd = dx * qx + dy * qy + dz * qz;
+          const float c = -2.5f * dqd * r2_inv;
+          fx += r5_inv * (qx + c * dx);
+          fy += r5_inv * (qy + c * dy);
+          fz += r5_inv * (qz + c * dz);
+          fp -= 0.5f * dqd * r5_inv;
         }
-        g.ax[t] += fx;
-        g.ay[t] += fy;
-        g.az[t] += fz;
-        g.pot[t] += fp;
+        ax[t] += fx;
+        ay[t] += fy;
+        az[t] += fz;
+        pot[t] += fp;
       }
     }
   };
@@ -160,33 +179,42 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
   else
     nodes.template operator()<false>();
   for (const std::int32_t k : list.far) {
-    const double px = pos_[k].x, py = pos_[k].y, pz = pos_[k].z, gm = G * mass_[k];
-    for (int t = 0; t < nt; ++t) {
-      const double dx = g.x[t] - px, dy = g.y[t] - py, dz = g.z[t] - pz;
-      const double r2 = dx * dx + dy * dy + dz * dz;
-      const double r_inv = 1.0 / std::sqrt(r2);
-      const double s = gm * (r_inv * r_inv * r_inv);
-      g.ax[t] -= s * dx;
-      g.ay[t] -= s * dy;
-      g.az[t] -= s * dz;
-      g.pot[t] += gm * -r_inv;
+    const float px = static_cast<float>((pos_[k].x - g.centre.x) * unit_inv),
+                py = static_cast<float>((pos_[k].y - g.centre.y) * unit_inv),
+                pz = static_cast<float>((pos_[k].z - g.centre.z) * unit_inv);
+    const float gm = static_cast<float>(G * mass_[k] * gm_scale);
+    for (int t = 0; t < lanes; ++t) {
+      const float dx = g.xr[t] - px, dy = g.yr[t] - py, dz = g.zr[t] - pz;
+      const float r2 = dx * dx + dy * dy + dz * dz;
+      const float r_inv = 1.0f / std::sqrt(r2);
+      const float s = gm * (r_inv * r_inv * r_inv);
+      ax[t] -= s * dx;
+      ay[t] -= s * dy;
+      az[t] -= s * dz;
+      pot[t] -= gm * r_inv;
     }
   }
+  for (int t = 0; t < nt; ++t) {
+    g.ax[t] = static_cast<double>(ax[t]) * g.accel_unit;
+    g.ay[t] = static_cast<double>(ay[t]) * g.accel_unit;
+    g.az[t] = static_cast<double>(az[t]) * g.accel_unit;
+    g.pot[t] = static_cast<double>(pot[t]) * pot_unit;
+  }
   // The near list is most of the work in a collapsed object (every particle within the
-  // softening is summed directly). Its loop is branch-free and in float, over 8 or 16 lanes
-  // (padded), so it vectorises with twice the lanes of double: positions relative to the
-  // group's centre (within a few spline lengths, so float keeps ~1e-7 of the separation), sums
-  // in float and then added to the double totals. Pair errors stay below 1e-5, far below the
-  // walk's ~1e-3 (docs/gravity.md). A target's own particle and unsoftened coincident
-  // particles (no force direction) add exact zeros.
+  // softening is summed directly). Its loop is branch-free (every piece of the spline is
+  // computed and one selected). A target's own particle and unsoftened coincident particles
+  // (no force direction) add exact zeros.
   {
-    const int lanes = nt <= 8 ? 8 : kGroupSize;
-    float ax[kGroupSize] = {}, ay[kGroupSize] = {}, az[kGroupSize] = {}, pot[kGroupSize] = {};
+    std::fill(ax, ax + kGroupSize, 0.0f);
+    std::fill(ay, ay + kGroupSize, 0.0f);
+    std::fill(az, az + kGroupSize, 0.0f);
+    std::fill(pot, pot + kGroupSize, 0.0f);
     float owned[kGroupSize] = {};
     for (const std::int32_t k : list.near) {
-      const float px = static_cast<float>(pos_[k].x - g.centre.x), py = static_cast<float>(pos_[k].y - g.centre.y),
-                  pz = static_cast<float>(pos_[k].z - g.centre.z);
-      const float gm = static_cast<float>(G * mass_[k]);
+      const float px = static_cast<float>((pos_[k].x - g.centre.x) * unit_inv),
+                  py = static_cast<float>((pos_[k].y - g.centre.y) * unit_inv),
+                  pz = static_cast<float>((pos_[k].z - g.centre.z) * unit_inv);
+      const float gm = static_cast<float>(G * mass_[k] * gm_scale);
       const float h_k = spline_f_[k], h_inv_k = spline_inv_f_[k];
       const IndexKey source = index_key(index_[k]);
       for (int t = 0; t < lanes; ++t) {
@@ -211,12 +239,12 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
         pot[t] += gm_pull * f.potential;
       }
     }
-    static_assert(!GravitySplit{}.enabled(), "the near loop applies no short-range factors yet");
+    static_assert(!GravitySplit{}.enabled(), "the float loops apply no short-range factors yet");
     for (int t = 0; t < nt; ++t) {
-      g.ax[t] += ax[t];
-      g.ay[t] += ay[t];
-      g.az[t] += az[t];
-      g.pot[t] += pot[t];
+      g.ax[t] += static_cast<double>(ax[t]) * g.accel_unit;
+      g.ay[t] += static_cast<double>(ay[t]) * g.accel_unit;
+      g.az[t] += static_cast<double>(az[t]) * g.accel_unit;
+      g.pot[t] += static_cast<double>(pot[t]) * pot_unit;
       g.own[t] = owned[t] > 0.0f ? 1 : 0;
     }
   }
@@ -254,7 +282,10 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
 
+  const double unit_inv = 1.0 / length_unit_;
   Group g;
+  const double field = config.G * root.mass * unit_inv * unit_inv;
+  g.accel_unit = field > 0.0 && std::isfinite(field) ? std::ldexp(1.0, std::ilogb(field)) : 1.0;
   InteractionList list;
   for (std::size_t begin = 0; begin < order.size(); begin += kGroupSize) {
     g.n = static_cast<int>(std::min<std::size_t>(kGroupSize, order.size() - begin));
@@ -264,10 +295,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
     double a_min = 0.0;
     for (int t = 0; t < g.n; ++t) {
       const GravityTarget& tg = targets[order[begin + static_cast<std::size_t>(t)]];
-      g.x[t] = tg.position.x;
-      g.y[t] = tg.position.y;
-      g.z[t] = tg.position.z;
-      g.spline[t] = static_cast<float>(spline_length(tg.softening));
+      g.spline[t] = static_cast<float>(spline_length(tg.softening) * unit_inv);
       g.spline_inv[t] = 1.0f / g.spline[t];
       const IndexKey key = index_key(static_cast<std::int32_t>(tg.source_index));
       g.self_hi[t] = key.hi;
@@ -286,9 +314,10 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
     g.half = 0.5 * (hi - lo);
     for (int t = 0; t < kGroupSize; ++t) {
       if (t < g.n) {
-        g.xr[t] = static_cast<float>(g.x[t] - g.centre.x);
-        g.yr[t] = static_cast<float>(g.y[t] - g.centre.y);
-        g.zr[t] = static_cast<float>(g.z[t] - g.centre.z);
+        const Vec3& x = targets[order[begin + static_cast<std::size_t>(t)]].position;
+        g.xr[t] = static_cast<float>((x.x - g.centre.x) * unit_inv);
+        g.yr[t] = static_cast<float>((x.y - g.centre.y) * unit_inv);
+        g.zr[t] = static_cast<float>((x.z - g.centre.z) * unit_inv);
       } else {  // padding: a copy of the first target that is no particle
         g.xr[t] = g.xr[0];
         g.yr[t] = g.yr[0];
