@@ -6,7 +6,11 @@
 #
 #   sh examples/rotating_sphere/run_convergence.sh            # all six runs, then the plots
 #   SIZES="2000" SCHEMES="msph" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
+#   JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # two runs at a time
 #
+# With JOBS > 1, that many runs go at once (largest first, each taking the next run left when
+# it finishes): on 2 cores, two 1-thread runs side by side finish the study sooner than
+# one 2-thread run after another, as a single run's second thread idles in its serial parts.
 # Runs go to examples/rotating_sphere/output/<N>_<scheme>/ ($OUTPUT/<N>_<scheme>/ if set) and
 # the figures to docs/validation/ ($DOCS if set); a finished run is not redone.
 # Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
@@ -21,6 +25,8 @@ bin=${FOUNTAIN_BIN:-$root/build/fountain}
 out=${OUTPUT:-$here/output}
 mkdir -p "$out"
 threads=${THREADS:-2}
+jobs=${JOBS:-1}
+runs=""
 for n in ${SIZES:-2000 4000 8000}; do
   case $n in
     2000) eps=0.002 ;;
@@ -32,6 +38,7 @@ for n in ${SIZES:-2000 4000 8000}; do
   [ -f "$ic" ] || "$bin" ic sphere -n "$n" -o "$ic"
   for scheme in ${SCHEMES:-sph msph}; do
     dir="$out/${n}_$scheme"
+    runs="$runs ${n}_$scheme"
     [ -f "$dir/done" ] && continue
     mkdir -p "$dir"
     msph=false
@@ -59,8 +66,37 @@ gravity:
 cooling:
   enabled: true
 EOT
-    echo "== $n per species, $scheme"
-    run_or_resume "$dir"
   done
 done
+
+# A worker takes runs in turn, claiming each by creating its claim directory (atomic), so that
+# workers never share a run; claims are cleared when the script starts.
+claims="$out/.claims"
+rm -rf "$claims"
+mkdir -p "$claims"
+work() {
+  for run in $1; do
+    [ -f "$out/$run/done" ] && continue
+    mkdir "$claims/$run" 2> /dev/null || continue
+    echo "== $run (${threads} threads)"
+    run_or_resume "$out/$run"
+  done
+}
+if [ "$jobs" -le 1 ]; then
+  work "$runs"
+else
+  # Largest first: the runs' order reversed.
+  reversed=""
+  for run in $runs; do reversed="$run $reversed"; done
+  pids=""
+  k=0
+  while [ "$k" -lt "$jobs" ]; do
+    work "$reversed" &
+    pids="$pids $!"
+    k=$((k + 1))
+  done
+  failed=0
+  for pid in $pids; do wait "$pid" || failed=$?; done
+  [ "$failed" -eq 0 ] || exit "$failed"
+fi
 /usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "${DOCS:-$root/docs/validation}"
