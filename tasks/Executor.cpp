@@ -36,6 +36,24 @@ std::int64_t now_ticks() {
   return now_ns();
 #endif
 }
+
+// Marks the thread as running a task's body, so that for_each_in_task can tell its own
+// pieces (inside the task's time already) from those a helping thread runs.
+class InTask {
+ public:
+  InTask() : outer_(flag()) { flag() = true; }
+  ~InTask() { flag() = outer_; }
+  InTask(const InTask&) = delete;
+  InTask& operator=(const InTask&) = delete;
+  static bool here() { return flag(); }
+
+ private:
+  static bool& flag() {
+    thread_local bool in_task = false;
+    return in_task;
+  }
+  bool outer_;
+};
 }  // namespace
 
 Executor::Executor(int threads)
@@ -92,6 +110,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   // through TBB's queues: so a task sees the set-up and its predecessors' writes, the caller
   // sees every task's writes, and ThreadSanitizer (TBB is not instrumented) sees it all too.
   std::atomic<bool> go{false};
+  helped_ticks_.store(0, std::memory_order_relaxed);
   const std::int64_t k0 = now_ticks();
   std::atomic<bool> failed{false};
   std::exception_ptr error;
@@ -133,6 +152,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         if (task.active) {
           const std::int64_t s = now_ticks();
           try {
+            const InTask in_task;
             runner(task);
           } catch (...) {
             // The first failure is kept and rethrown by the caller; what depends on it never runs.
@@ -219,7 +239,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   if (failed.load()) std::rethrow_exception(error);
   if (done.load(std::memory_order_acquire) != n_part)
     throw std::logic_error(fmt::format("task graph has a dependency cycle: {} of {} tasks could run", done.load(), n_part));
-  last_busy_ns_ = static_cast<std::int64_t>(static_cast<double>(busy.load()) * ns_per_tick);
+  last_busy_ns_ = static_cast<std::int64_t>(static_cast<double>(busy.load() + helped_ticks_.load()) * ns_per_tick);
 }
 
 }  // namespace fountain::tasks
@@ -238,6 +258,35 @@ void Executor::run_beside(const std::function<void()>& a, const std::function<vo
 
 void Executor::for_each(std::size_t n, const std::function<void(std::size_t)>& fn) {
   arena_->execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) { fn(k); }); });
+}
+
+void Executor::for_each_in_task(std::size_t n, const std::function<void(std::size_t)>& fn) {
+  // Pieces are claimed from one counter by the caller and by a helper job per other thread.
+  // Jobs go through TBB's queue like the graph's (SpawnedJob), and everything they read or
+  // write is ordered by these atomics, which ThreadSanitizer sees. Isolated, the caller's
+  // wait runs only these jobs (a helper not yet started finds no piece left and returns).
+  std::atomic<std::size_t> next{0}, done{0};
+  std::atomic<bool> go{false};
+  std::function<void(int)> help = [&](int) {
+    const bool helping = !InTask::here();
+    const std::int64_t s = helping ? now_ticks() : 0;
+    std::size_t mine = 0;
+    for (std::size_t k = next.fetch_add(1, std::memory_order_relaxed); k < n;
+         k = next.fetch_add(1, std::memory_order_relaxed)) {
+      fn(k);
+      ++mine;
+    }
+    if (helping) helped_ticks_.fetch_add(now_ticks() - s, std::memory_order_relaxed);
+    done.fetch_add(mine, std::memory_order_acq_rel);
+  };
+  tbb::this_task_arena::isolate([&] {
+    tbb::task_group group;
+    go.store(true, std::memory_order_release);
+    for (int h = 1; h < threads_ && static_cast<std::size_t>(h) < n; ++h) group.run(SpawnedJob{&help, &go, 0});
+    help(0);
+    group.wait();
+  });
+  (void)done.load(std::memory_order_acquire);  // the helpers' writes, before the caller goes on
 }
 
 }  // namespace fountain::tasks

@@ -1,5 +1,6 @@
 // Runs a TaskGraph on TBB worker threads, honouring every dependency, and records a timeline.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -57,6 +58,12 @@ class Executor {
   // Runs fn(0..n-1) in parallel on this executor's threads (for simple per-cell sweeps).
   void for_each(std::size_t n, const std::function<void(std::size_t)>& fn);
 
+  // The same from inside a running task, so that a thread with nothing else to do helps a
+  // task that holds up the step. The calling thread takes only this loop's pieces while it
+  // waits (never another task, which would run inside this one's record); a helping
+  // thread's time counts as busy. fn(k) must not depend on which thread runs it.
+  void for_each_in_task(std::size_t n, const std::function<void(std::size_t)>& fn);
+
   // Runs a and b at once on this executor's threads (one after the other on one thread) and
   // returns when both are done; they must not touch the same data.
   void run_beside(const std::function<void()>& a, const std::function<void()>& b);
@@ -74,6 +81,7 @@ class Executor {
   std::vector<char> listed_;  // scratch for `only`: which tasks are listed
   std::int64_t last_wall_ns_ = 0;
   std::int64_t last_busy_ns_ = 0;
+  std::atomic<std::int64_t> helped_ticks_{0};  // for_each_in_task pieces run outside any task
 };
 
 }  // namespace fountain::tasks

@@ -34,6 +34,10 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
                                  "(set gravity.enabled: true)",
                                  dm_.size()));
   ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_, dm_, config_.gravity, nullptr, {}});
+  if (executor_.threads() > 1)
+    ctx_->in_task_for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) {
+      executor_.for_each_in_task(n, fn);
+    };
   if (config_.cooling.enabled) {
     cooling_table_ = std::make_unique<cooling::CoolingTable>(config_.cooling.tables(), config_.cooling.metallicity);
     cooling_ = std::make_unique<cooling::RadiativeCooling>(*cooling_table_, config_.units, config_.cooling.hydrogen_fraction);

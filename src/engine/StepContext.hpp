@@ -4,6 +4,7 @@
 
 #include <memory>
 
+#include "core/ForEach.hpp"
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
 #include "particles/CollisionlessParticles.hpp"
@@ -46,6 +47,11 @@ struct StepContext {
   TreeUpdate tree_update = TreeUpdate::build;
 
   IntegerTime ti_current = 0;
+
+  // A parallel loop for use inside a task (Executor::for_each_in_task), empty on one thread:
+  // a task whose work splits (a cell's gravity walk) lets idle threads help, so that a big
+  // task at the end of a step does not leave them waiting.
+  ForEach in_task_for_each = {};
 
   // Set by tasks, read by the engine after the step.
   std::atomic<bool> cover_exceeded{false};  // some h outgrew its cell's cover: rebuild

@@ -83,7 +83,9 @@ void walk_cell(StepContext& ctx, int c) {
     dm_targets.push_back(i);
   }
   std::vector<GravityResult> results(targets.size());
-  ctx.tree->accelerate(targets, config, results);
+  // More than two groups: idle threads may take some.
+  const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::kGroupSize);
+  ctx.tree->accelerate(targets, config, results, split ? ctx.in_task_for_each : ForEach{});
   std::size_t k = 0;
   for (const std::size_t i : gas_targets) {
     gas.a_grav[i] = results[k].acceleration;

@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "core/ForEach.hpp"
 #include "core/Vec3.hpp"
 #include "gravity/GravityKernel.hpp"
 #include "gravity/GravityMultipole.hpp"
@@ -116,10 +117,11 @@ class GravityTree {
   // The same for many targets (an engine task passes its cell's active particles): they are
   // walked in spatially compact groups of up to kGroupSize, each group sharing one walk whose
   // opening tests hold for every point of the group's box. A target's answer therefore
-  // depends on the targets passed with it (never on the thread running the call).
+  // depends on the targets passed with it (never on the thread running the call, nor on
+  // whether `for_each` runs the groups in parallel).
   static constexpr int kGroupSize = 16;
-  void accelerate(std::span<const GravityTarget> targets, const WalkConfig& config,
-                  std::span<GravityResult> results) const;
+  void accelerate(std::span<const GravityTarget> targets, const WalkConfig& config, std::span<GravityResult> results,
+                  const ForEach& for_each = {}) const;
 
   const std::vector<TreeNode>& nodes() const { return nodes_; }
   // Source index of the particle at each tree position.

@@ -257,7 +257,7 @@ GravityResult GravityTree::accelerate(const GravityTarget& target, const WalkCon
 }
 
 void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkConfig& config,
-                             std::span<GravityResult> results) const {
+                             std::span<GravityResult> results, const ForEach& for_each) const {
   if (results.size() != targets.size())
     throw std::invalid_argument("GravityTree::accelerate: targets and results differ in length");
   for (GravityResult& r : results) r = GravityResult{};
@@ -283,11 +283,15 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return keys[a] < keys[b]; });
 
   const double unit_inv = 1.0 / length_unit_;
-  Group g;
   const double field = config.G * root.mass * unit_inv * unit_inv;
-  g.accel_unit = field > 0.0 && std::isfinite(field) ? std::ldexp(1.0, std::ilogb(field)) : 1.0;
-  InteractionList list;
-  for (std::size_t begin = 0; begin < order.size(); begin += kGroupSize) {
+  const double accel_unit = field > 0.0 && std::isfinite(field) ? std::ldexp(1.0, std::ilogb(field)) : 1.0;
+  // Each group is walked and evaluated alone, so groups may go in parallel: a target's answer
+  // depends only on its group.
+  auto walk_and_evaluate = [&](std::size_t group) {
+    thread_local InteractionList list;
+    Group g;
+    g.accel_unit = accel_unit;
+    const std::size_t begin = group * kGroupSize;
     g.n = static_cast<int>(std::min<std::size_t>(kGroupSize, order.size() - begin));
     Vec3 lo = targets[order[begin]].position, hi = lo;
     g.h_max = 0.0;
@@ -343,7 +347,8 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       r.node_interactions = static_cast<std::int64_t>(list.nodes.size());
       r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - g.own[t];
     }
-  }
+  };
+  for_each_or_serial(for_each, (order.size() + kGroupSize - 1) / kGroupSize, walk_and_evaluate);
 }
 
 }  // namespace fountain::gravity
