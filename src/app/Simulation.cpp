@@ -184,8 +184,9 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   const double dt_out = config.output.delta_time;
   int next_output = restart ? state.next_output : 1;
   auto last_restart = std::chrono::steady_clock::now();
-  auto write_restart = [&] {
-    engine.rebuild_now();
+  // Writes the state as it stands: right after a recut of the cells (restore() recuts the
+  // same particles into the same cells).
+  auto save_restart = [&] {
     io::RestartState out;
     out.gas = engine.gas();
     out.dm = engine.dark_matter();
@@ -201,6 +202,25 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     last_restart = std::chrono::steady_clock::now();
     if (!quiet) fmt::print(stderr, "restart file {} at step {}\n", restart_path(params), engine.steps());
   };
+  // A restart file that is due (by steps or minutes) is written at the next recut the run
+  // makes anyway: inside a step, before its tasks (Engine::set_after_rebuild), or after a
+  // step that ended with one, once the step's outputs are written; so when it is written
+  // (which depends on the wall clock) changes nothing in the run. Only on SIGTERM, or if no
+  // recut comes within kMostStepsWaiting steps, are the cells recut for it: that recut then
+  // starts a path of its own (the restarted run follows it, bit for bit).
+  constexpr long long kMostStepsWaiting = 1000;
+  bool restart_wanted = false;
+  long long wanted_since = 0;
+  auto write_restart_now = [&] {
+    engine.rebuild_now();
+    save_restart();
+    restart_wanted = false;
+  };
+  engine.set_after_rebuild([&] {
+    if (!restart_wanted) return;
+    save_restart();
+    restart_wanted = false;
+  });
   auto next_output_ticks = [&] {
     if (dt_out <= 0.0) return TimeLine::ticks;
     const double t = config.t_begin + next_output * dt_out;
@@ -252,12 +272,21 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     }
     if (engine.finished()) break;
     const double minutes = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_restart).count() / 60.0;
-    bool restart_due = g_terminate || (config.restart.every_steps > 0 && engine.steps() % config.restart.every_steps == 0) ||
+    bool restart_due = (config.restart.every_steps > 0 && engine.steps() % config.restart.every_steps == 0) ||
                        (config.restart.every_minutes > 0 && minutes >= config.restart.every_minutes);
     // Clocks and signals differ between ranks: they decide together.
     const bool terminate = engine.any_rank(g_terminate != 0);
     restart_due = engine.any_rank(restart_due);
-    if (restart_due) write_restart();
+    if (restart_due && !restart_wanted) {
+      restart_wanted = true;
+      wanted_since = engine.steps();
+    }
+    if (terminate || (restart_wanted && engine.steps() - wanted_since >= kMostStepsWaiting)) {
+      write_restart_now();
+    } else if (restart_wanted && s.recut_at_end) {
+      save_restart();
+      restart_wanted = false;
+    }
     if (terminate) {
       if (io_rank)
         fmt::print(stderr, "stopped by SIGTERM at step {}; continue with: fountain run {} --restart\n", engine.steps(),
@@ -266,6 +295,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
       break;
     }
   }
+  engine.set_after_rebuild({});  // it refers to this function's locals
   if (!summary.terminated) write();
   summary.steps = engine.steps();
   summary.final_time = engine.time();

@@ -547,6 +547,8 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   const IntegerTime ti_prev = ti_current_;
   const int rebuilds_before = space_.rebuild_count();
   prepare_step(ti_next);
+  if (after_rebuild_ && space_.rebuild_count() != rebuilds_before) after_rebuild_();
+  const int rebuilds_after_prepare = space_.rebuild_count();
   info.active = activate(Phase::Full);
   if (info.active > 0) {
     run_graph(&info);
@@ -558,6 +560,8 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   info.time = time();
   info.dt = timeline_.time(ti_next) - timeline_.time(ti_prev);
   info.rebuilt = space_.rebuild_count() != rebuilds_before;
+  // Star formation recuts the cells at the end of a step when particles came or went.
+  info.recut_at_end = space_.rebuild_count() != rebuilds_after_prepare;
   info.wall_s = seconds_since(t0);
   return info;
 }

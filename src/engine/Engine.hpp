@@ -1,6 +1,7 @@
 // The engine: owns particles and cells, builds the task graph and advances the run step by step.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -44,6 +45,7 @@ struct StepInfo {
   std::size_t active = 0;        // active particles
   std::size_t tasks_run = 0;
   bool rebuilt = false;
+  bool recut_at_end = false;     // the cells were recut last thing (star formation changed the particles)
   double wall_s = 0.0;           // whole step
   double tasks_wall_s = 0.0;     // inside the executor
   double tasks_busy_s = 0.0;     // summed over threads, inside tasks
@@ -67,6 +69,12 @@ class Engine {
   void rebuild_now();
   // Continues a run from a restart file's particles (in place of initialise()).
   void restore(IntegerTime ti_current, long long steps);
+  // Called inside step() right after the cells were recut because the run needed it, before
+  // that step's tasks: a restart file written then holds the particles just as the recut
+  // left them, and restore() recuts them into the same cells, so the restarted run goes on
+  // exactly as this one, and writing the file changes nothing in the run. (A step that ends
+  // with a recut says so in StepInfo::recut_at_end: that is such a point too.)
+  void set_after_rebuild(std::function<void()> f) { after_rebuild_ = std::move(f); }
 
   // Densities, h and forces of the particles active at ti, with no kick: for tests that
   // compare the loops with direct summation.
@@ -189,6 +197,7 @@ class Engine {
   long long h_capped_steps_ = 0;  // steps whose h solve was capped by a cell's reach
   bool rebuild_pending_ = true;
   bool initialised_ = false;  // the first forces and timesteps are done
+  std::function<void()> after_rebuild_;
   bool record_timeline_ = false;
 
   std::unique_ptr<domain::RankExchange> ranks_;   // null when running alone
