@@ -121,8 +121,9 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
 // Every list is evaluated in float over 8 or 16 lanes (the group padded with copies that are
 // no particle), twice the lanes of double, with lengths relative to the group's centre in
 // units of length_unit_ and accelerations in units of g.accel_unit (powers of two, so the
-// scalings are exact, chosen so that float's exponent range holds whatever the unit system). Each list sums in float and is
-// added to the double totals once per group: nodes and far particles, then near particles.
+// scalings are exact, chosen so that float's exponent range holds whatever the unit
+// system). Each list sums in float and is added to the double totals once per group: nodes
+// and far particles, then near particles.
 // Errors: ~1e-7 per interaction for nodes and far particles, up to a few 1e-6 for near pairs,
 // far below the walk's ~1e-3 (docs/gravity.md).
 FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const {
