@@ -184,6 +184,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   const double dt_out = config.output.delta_time;
   int next_output = restart ? state.next_output : 1;
   auto last_restart = std::chrono::steady_clock::now();
+  bool restart_wanted = false;  // due, waiting for a recut (below)
   // Writes the state as it stands: right after a recut of the cells (restore() recuts the
   // same particles into the same cells).
   auto save_restart = [&] {
@@ -200,6 +201,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     out.parameters_yaml = config.parameters_yaml;
     if (io_rank) io::write_restart(restart_path(params), out);
     last_restart = std::chrono::steady_clock::now();
+    restart_wanted = false;
     if (!quiet) fmt::print(stderr, "restart file {} at step {}\n", restart_path(params), engine.steps());
   };
   // A restart file that is due (by steps or minutes) is written at the next recut the run
@@ -209,17 +211,13 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   // recut comes within kMostStepsWaiting steps, are the cells recut for it: that recut then
   // starts a path of its own (the restarted run follows it, bit for bit).
   constexpr long long kMostStepsWaiting = 1000;
-  bool restart_wanted = false;
   long long wanted_since = 0;
   auto write_restart_now = [&] {
     engine.rebuild_now();
     save_restart();
-    restart_wanted = false;
   };
   engine.set_after_rebuild([&] {
-    if (!restart_wanted) return;
-    save_restart();
-    restart_wanted = false;
+    if (restart_wanted) save_restart();
   });
   auto next_output_ticks = [&] {
     if (dt_out <= 0.0) return TimeLine::ticks;
@@ -285,7 +283,6 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
       write_restart_now();
     } else if (restart_wanted && s.recut_at_end) {
       save_restart();
-      restart_wanted = false;
     }
     if (terminate) {
       if (io_rank)
