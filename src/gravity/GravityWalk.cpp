@@ -57,6 +57,21 @@ inline IndexKey index_key(std::int32_t i) { return {static_cast<float>(i >> 12),
 
 // The gap between the group's box and a point or a cube, per axis.
 inline double gap(double offset, double reach) { return std::max(std::fabs(offset) - reach, 0.0); }
+
+// An opened leaf whose cube lies wholly within the group's smallest spline length of the box
+// has only near particles; one whose cube is wholly beyond every pair's spline length (h, the
+// largest of the group's and the leaf's) only far ones. Either way each particle's own test
+// would say the same, as the particles lie inside their leaf's cube (built so, and refitted
+// so); `slack` keeps rounding from deciding. Otherwise each particle is tested.
+enum class Bulk { near, far, mixed };
+inline Bulk classify_leaf(const Vec3& box_half, double h_max, const TreeNode& leaf, double ox, double oy,
+                          double oz, double d2box, double h, double slack) {
+  const double half = 0.5 * leaf.side;
+  const double fx = gap(ox, box_half.x - half), fy = gap(oy, box_half.y - half), fz = gap(oz, box_half.z - half);
+  if (std::sqrt(fx * fx + fy * fy + fz * fz) + slack < h_max) return Bulk::near;
+  if (d2box > 0.0 && std::sqrt(d2box) >= h + slack) return Bulk::far;
+  return Bulk::mixed;
+}
 }  // namespace
 
 // Every test is the one-target test applied to the nearest point of the group's box, so a
@@ -66,6 +81,9 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   list.clear();
   const double theta2 = config.theta * config.theta;
   const double cutoff = config.split.cutoff_radius();
+  // Above the rounding of any gap computed inside the root cube.
+  const double slack = 1e-12 * (nodes_[0].side + std::fabs(nodes_[0].centre.x) + std::fabs(nodes_[0].centre.y) +
+                                std::fabs(nodes_[0].centre.z));
   std::int32_t n = 0;
   while (n >= 0) {
     const TreeNode& node = nodes_[n];
@@ -104,6 +122,13 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
       n = node.next;
     } else if (node.first_child >= 0) {
       n = node.first_child;
+    } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
+      // Decided for the whole leaf, so its particles need no test of their own.
+      auto& to = bulk == Bulk::far ? list.far : list.near;
+      const std::size_t at = to.size();
+      to.resize(at + static_cast<std::size_t>(node.count));
+      std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
+      n = node.next;
     } else {
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const double px = gap(pos_[k].x - g.centre.x, g.half.x), py = gap(pos_[k].y - g.centre.y, g.half.y),
