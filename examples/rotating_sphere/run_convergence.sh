@@ -9,8 +9,9 @@
 #   JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # two runs at a time
 #
 # With JOBS > 1, that many runs go at once (largest first, each taking the next run left when
-# it finishes): on 2 cores, two 1-thread runs side by side finish the study sooner than
-# one 2-thread run after another, as a single run's second thread idles in its serial parts.
+# it finishes; the last run goes on with all the workers' threads once the others are idle):
+# on 2 cores, two 1-thread runs side by side finish the study sooner than one 2-thread run
+# after another, as a single run's second thread idles in its serial parts.
 # Runs go to examples/rotating_sphere/output/<N>_<scheme>/ ($OUTPUT/<N>_<scheme>/ if set) and
 # the figures to docs/validation/ ($DOCS if set); a finished run is not redone.
 # Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
@@ -70,20 +71,34 @@ EOT
 done
 
 # A worker takes runs in turn, claiming each by creating its claim directory (atomic), so that
-# workers never share a run; claims are cleared when the script starts.
+# workers never share a run; claims are cleared when the script starts. A worker that finds
+# no run left marks itself idle; the last but one to do so stops the one run still going
+# (SIGTERM: it writes a restart file) and that run's worker resumes it on every worker's
+# threads, so no core idles beside the study's last run.
 claims="$out/.claims"
 rm -rf "$claims"
 mkdir -p "$claims"
+wide_threads=$((threads * jobs))
 work() {
   for run in $1; do
     [ -f "$out/$run/done" ] && continue
     mkdir "$claims/$run" 2> /dev/null || continue
     echo "== $run (${threads} threads)"
+    pid_file="$claims/$run/pid" widen_dir="$claims/$run/widen"
     run_or_resume "$out/$run"
+  done
+  [ "$jobs" -gt 1 ] || return 0
+  mkdir "$claims/.idle_$2"
+  [ "$(ls -d "$claims"/.idle_* | wc -l)" -eq $((jobs - 1)) ] || return 0
+  for run in $1; do
+    [ ! -f "$out/$run/done" ] && [ -f "$claims/$run/pid" ] || continue
+    mkdir "$claims/$run/widen" 2> /dev/null || continue
+    echo "== $run: the other workers are idle; restarting it on $wide_threads threads"
+    kill -TERM "$(cat "$claims/$run/pid")" 2> /dev/null || true
   done
 }
 if [ "$jobs" -le 1 ]; then
-  work "$runs"
+  work "$runs" 0
 else
   # Largest first: the runs' order reversed.
   reversed=""
@@ -91,7 +106,7 @@ else
   pids=""
   k=0
   while [ "$k" -lt "$jobs" ]; do
-    work "$reversed" &
+    work "$reversed" "$k" &
     pids="$pids $!"
     k=$((k + 1))
   done
