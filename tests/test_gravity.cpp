@@ -529,6 +529,36 @@ TEST(GravityTree, NeverAcceptingANodeIsDirectSummation) {
   }
 }
 
+// Grouped walks that open every node are direct summation too: this checks how opened leaves'
+// particles are split into near (softened) and far (Newtonian) lists, whole leaves at a time
+// where a leaf lies wholly within or beyond the spline lengths, particle by particle where it
+// straddles. In the softened disc most disc pairs are softened, so a leaf put on the wrong
+// list changes a disc particle's force by far more than the float sums' ~1e-6.
+TEST(GravityTree, GroupedWalksOpeningEveryNodeAreDirectSummation) {
+  const ParticleSet disc = softened_disc();
+  ParticleSet s;  // 1000 halo and 1000 disc particles
+  for (std::size_t i : {std::size_t{0}, std::size_t{4000}})
+    for (std::size_t k = i; k < i + 1000; ++k) {
+      s.x.push_back(disc.x[k]);
+      s.m.push_back(disc.m[k]);
+      s.eps.push_back(disc.eps[k]);
+    }
+  const GravityTree tree(s.x, s.m, s.eps);
+  WalkConfig exact;
+  exact.theta = 1e-9;
+  exact.G = 4.3;
+  const DirectSums d = direct_summation(s.x, s.m, s.eps, exact.G);
+  const std::vector<GravityResult> r = walk(tree, targets_of(s, nullptr), exact);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    EXPECT_EQ(r[i].node_interactions, 0);
+    EXPECT_EQ(r[i].particle_interactions, static_cast<std::int64_t>(s.x.size()) - 1);
+    worst = std::max(worst, norm(r[i].acceleration - d.acceleration[i]) / norm(d.acceleration[i]));
+    EXPECT_NEAR(r[i].potential, d.potential[i], 1e-5 * std::fabs(d.potential[i])) << "particle " << i;
+  }
+  EXPECT_LT(worst, 1e-4);
+}
+
 TEST(GravityTree, QuadrupoleBeatsMonopoleInTheFarField) {
   // One leaf holding a lopsided cloud, seen from 10 cloud sizes away: the monopole's error is
   // ~(l/r)^2 ~ 1e-2, the quadrupole's ~(l/r)^3 ~ 1e-3.
