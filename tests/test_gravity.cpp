@@ -298,6 +298,17 @@ void expect_nodes_summarise(const GravityTree& tree, const ParticleSet& set) {
     }
     EXPECT_NEAR(node.mass, static_cast<double>(mass), 1e-14 * static_cast<double>(mass));
     EXPECT_EQ(node.max_softening, max_eps);
+    // The second moment about the centre of mass (the softened expansion's trace).
+    long double second = 0;
+    double min_eps = max_eps;
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+      const std::int32_t i = tree.order()[k];
+      const Vec3 s = set.x[i] - node.com;
+      second += set.m[i] * dot(s, s);
+      min_eps = std::min(min_eps, set.eps[i]);
+    }
+    EXPECT_NEAR(node.second_moment, static_cast<double>(second), 1e-9 * static_cast<double>(second) + 1e-300);
+    EXPECT_EQ(node.min_softening, min_eps);
     EXPECT_NEAR(node.quadrupole[0] + node.quadrupole[1] + node.quadrupole[2], 0.0, 1e-12);
     if (node.first_child < 0) {
       EXPECT_LE(node.count, tree.config().max_leaf_size);
@@ -673,6 +684,81 @@ TEST(GravityMultipole, ErrorFallsAsTheNeglectedOrder) {
   EXPECT_NEAR(quad_pot, 3.0, 0.2);
 }
 
+TEST(GravityKernel, SoftenedDerivativesAreTheKernels) {
+  // d1 is the pair force bit for bit; d2 and d3 are the radial derivatives of d1 and d2 over
+  // r (central differences, h = 1), on both spline pieces and beyond; all join where the
+  // pieces meet.
+  auto at = [](double r) { return softened_derivatives_branch_free(r, 1.0, 1.0); };
+  for (double r = 0.03; r < 1.6; r += 0.0173) {
+    const auto k = at(r);
+    const auto pair = softened_pair_branch_free(r, 1.0, 1.0);
+    EXPECT_EQ(k.d1, pair.force);
+    EXPECT_EQ(k.potential, pair.potential);
+    const double dr = 1e-6;
+    if (std::fabs(r - 0.5) < 2 * dr || std::fabs(r - 1.0) < 2 * dr) continue;
+    const double d2 = (at(r + dr).d1 - at(r - dr).d1) / (2 * dr) / r;
+    const double d3 = (at(r + dr).d2 - at(r - dr).d2) / (2 * dr) / r;
+    EXPECT_NEAR(k.d2, d2, 1e-6 * std::fabs(d2) + 1e-6) << "r = " << r;
+    EXPECT_NEAR(k.d3, d3, 1e-6 * std::fabs(d3) + 1e-6) << "r = " << r;
+  }
+  for (double join : {0.5, 1.0}) {
+    const auto below = at(std::nextafter(join, 0.0)), above = at(join);
+    EXPECT_NEAR(below.d2, above.d2, 1e-9 * std::fabs(above.d2)) << "u = " << join;
+    EXPECT_NEAR(below.d3, above.d3, 1e-9 * std::fabs(above.d3)) << "u = " << join;
+  }
+}
+
+// A cloud of 50 particles in a cube of side l, seen from distance r well inside the softening
+// (h = 3 r: the inner spline piece) or across it (h = 1.3 r: the outer piece): the softened
+// expansion against the softened direct sum. Without Q and T (a softened monopole) the error
+// falls as (l/r)^2, with them as (l/r)^3.
+TEST(GravityMultipole, SoftenedExpansionErrorFallsAsTheNeglectedOrder) {
+  ParticleSet s;
+  std::mt19937_64 rng(31);
+  for (int i = 0; i < 50; ++i) {
+    s.x.push_back({uniform01(rng) - 0.5, 0.6 * (uniform01(rng) - 0.5), 0.3 * (uniform01(rng) - 0.5)});
+    s.m.push_back(0.5 + uniform01(rng));
+  }
+  TreeConfig one_leaf;
+  one_leaf.max_leaf_size = 1000;
+  s.eps.assign(s.x.size(), 0.001);
+  const GravityTree tree(s.x, s.m, s.eps, one_leaf);
+  const TreeNode& root = tree.nodes().at(0);
+  const double G = 1.3;
+  for (double h_over_r : {3.0, 1.3}) {
+    std::vector<double> quad_err, mono_err;
+    for (double ratio : {4.0, 8.0, 16.0, 32.0}) {
+      double q_worst = 0, m_worst = 0;
+      for (const Vec3& dir : {Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0.6, -0.48, 0.64}, Vec3{-0.36, 0.48, 0.8}}) {
+        const Vec3 x = root.com + ratio * dir;
+        const double h = h_over_r * ratio;
+        Vec3 a;
+        double phi = 0;
+        for (std::size_t k = 0; k < s.x.size(); ++k) {
+          const Vec3 d = x - s.x[k];
+          const PairGravity pg = softened_pair(norm(d), h);
+          a += (-G * s.m[k] * pg.force) * d;
+          phi += G * s.m[k] * pg.potential;
+        }
+        const NodeField quad = softened_node_field(x - root.com, root.mass, root.quadrupole, root.second_moment, h, G);
+        const NodeField mono = softened_node_field(x - root.com, root.mass, Quadrupole{}, 0.0, h, G);
+        q_worst = std::max(q_worst, norm(quad.acceleration - a) / norm(a));
+        m_worst = std::max(m_worst, norm(mono.acceleration - a) / norm(a));
+        EXPECT_NEAR(quad.potential, phi, 1e-2 * std::pow(ratio, -3.0) * std::fabs(phi));
+      }
+      quad_err.push_back(q_worst);
+      mono_err.push_back(m_worst);
+      std::cout << "h = " << h_over_r << " r, r/l = " << ratio << ": softened monopole error " << m_worst
+                << ", with Q and T " << q_worst << "\n";
+    }
+    for (std::size_t k = 0; k + 1 < quad_err.size(); ++k) {
+      EXPECT_LT(quad_err[k], 0.3 * mono_err[k]);
+      EXPECT_NEAR(std::log2(mono_err[k] / mono_err[k + 1]), 2.0, 0.4) << "h = " << h_over_r << " r";
+      EXPECT_NEAR(std::log2(quad_err[k] / quad_err[k + 1]), 3.0, 0.4) << "h = " << h_over_r << " r";
+    }
+  }
+}
+
 TEST(GravityMultipole, TheWalkUsesNodeField) {
   // A far target accepts the single root node: the walk's answer is node_field's, to float's
   // rounding (the walk evaluates in float; ~20 roundings of 6e-8). The quadrupole term is
@@ -699,6 +785,37 @@ TEST(GravityMultipole, TheWalkUsesNodeField) {
     EXPECT_LT(norm(r.acceleration - f.acceleration), 1e-6 * norm(f.acceleration));
     EXPECT_NEAR(r.potential, f.potential, 1e-6 * std::fabs(f.potential));
   }
+}
+
+TEST(GravityMultipole, TheWalkUsesSoftenedNodeField) {
+  // A target within the softening of a compact cloud, far enough to accept it whole (the
+  // first pass's Barnes-Hut angle and the softened-node angle, both 0.5): the walk's answer
+  // is softened_node_field's, to float's rounding; the same target without softened nodes
+  // sums the particles instead, and the two agree to the expansion's error.
+  ParticleSet s;
+  std::mt19937_64 rng(12);
+  for (int i = 0; i < 30; ++i) {
+    s.x.push_back({uniform01(rng), uniform01(rng), uniform01(rng)});
+    s.m.push_back(1.0 + uniform01(rng));
+  }
+  s.eps.assign(s.x.size(), 2.0);  // spline length 5.6
+  TreeConfig one_leaf;
+  one_leaf.max_leaf_size = 1000;
+  const GravityTree tree(s.x, s.m, s.eps, one_leaf);
+  const TreeNode& root = tree.nodes().at(0);
+  WalkConfig c;
+  c.G = 2.5;
+  const GravityTarget t{root.com + Vec3{2.5, -1.5, 1.0}, 2.0};  // r = 3.1, l <= 1
+  const GravityResult r = tree.accelerate(t, c);
+  ASSERT_EQ(r.node_interactions, 1);
+  const NodeField f = softened_node_field(t.position - root.com, root.mass, root.quadrupole, root.second_moment,
+                                          spline_length(2.0), c.G);
+  EXPECT_LT(norm(r.acceleration - f.acceleration), 1e-6 * norm(f.acceleration));
+  EXPECT_NEAR(r.potential, f.potential, 1e-6 * std::fabs(f.potential));
+  c.softened_nodes = false;
+  const GravityResult direct = tree.accelerate(t, c);
+  EXPECT_EQ(direct.node_interactions, 0);
+  EXPECT_LT(norm(direct.acceleration - f.acceleration), 1e-3 * norm(f.acceleration));
 }
 
 TEST(GravityTree, FloatLoopsHoldInAnyUnitOfLength) {
@@ -777,6 +894,7 @@ TEST(GravityAccuracy, QuadrupoleCutsTheWalkError) {
   // measured median 5.6e-4 vs 2.8e-3 (lattice) and 3.2e-4 vs 9.5e-4 (clustered).
   for (const Problem* p : {&lattice_problem(), &clustered_problem()}) {
     WalkConfig c = with_alpha(0.01, OpeningCriterion::gadget2_monopole);
+    c.softened_nodes = false;  // the monopole walk has none, and the lists must be the same
     const ErrorStats quad = errors(walk(p->tree, targets_of(p->set, &p->a_old), c), p->direct);
     c.expansion = MultipoleOrder::monopole;
     const ErrorStats mono = errors(walk(p->tree, targets_of(p->set, &p->a_old), c), p->direct);

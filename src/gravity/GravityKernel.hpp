@@ -114,4 +114,45 @@ inline PairGravityOf<Real> softened_pair_branch_free(Real r, Real h, Real h_inv)
   return out;
 }
 
+// The softened potential p(r) of a unit mass (p = -1/r beyond h) and its radial derivatives
+// as a multipole expansion needs them: d1 = p'/r (the pair force above), d2 = d1'/r,
+// d3 = d2'/r. Then the Hessian of p is d2 x x^T + d1 I and its third derivatives are
+// d3 x_i x_j x_k + d2 (x_i d_jk + x_j d_ik + x_k d_ij). Newtonian: d1 = 1/r^3, d2 = -3/r^5,
+// d3 = 15/r^7. On the spline's pieces (u = r/h):
+//   u < 1/2:     d2 = (-384/5 + 96 u) / h^5,                  d3 = 96 / (h^6 r)
+//   1/2 <= u < 1: d2 = (1/(5 u^5) - 48/u + 384/5 - 32 u) / h^5, d3 = (-1/u^7 + 48/u^3 - 32/u) / h^7
+// Each is continuous where the pieces meet (GravityKernel.SoftenedDerivativesAreTheKernels).
+// Branch-free like softened_pair_branch_free, whose potential and d1 it returns bit for bit.
+template <class Real>
+struct SoftenedDerivativesOf {
+  Real potential, d1, d2, d3;
+};
+template <class Real>
+inline SoftenedDerivativesOf<Real> softened_derivatives_branch_free(Real r, Real h, Real h_inv) {
+  const PairGravityOf<Real> pair = softened_pair_branch_free(r, h, h_inv);
+  const Real r_inv = Real(1) / r;
+  const Real r2_inv = r_inv * r_inv;
+  const Real newton_d2 = Real(-3) * (r2_inv * r2_inv * r_inv);
+  const Real newton_d3 = Real(15) * (r2_inv * r2_inv * r2_inv * r_inv);
+  const Real h_inv2 = h_inv * h_inv;
+  const Real h_inv5 = h_inv2 * h_inv2 * h_inv;
+  const Real h_inv6 = h_inv5 * h_inv;
+  const Real u = r * h_inv;
+  const Real inner_d2 = h_inv5 * (Real(-384.0 / 5.0) + Real(96) * u);
+  const Real inner_d3 = Real(96) * h_inv6 * r_inv;
+  const Real u_inv = h * r_inv;
+  const Real u_inv2 = u_inv * u_inv;
+  const Real u_inv3 = u_inv2 * u_inv;
+  const Real outer_d2 = h_inv5 * (Real(0.2) * (u_inv3 * u_inv2) - Real(48) * u_inv + Real(384.0 / 5.0) - Real(32) * u);
+  const Real outer_d3 = h_inv6 * h_inv * (u_inv * (Real(-1) * (u_inv3 * u_inv3) + Real(48) * u_inv2 - Real(32)));
+  const Real spline_d2 = u < Real(0.5) ? inner_d2 : outer_d2;
+  const Real spline_d3 = u < Real(0.5) ? inner_d3 : outer_d3;
+  SoftenedDerivativesOf<Real> out;
+  out.potential = pair.potential;
+  out.d1 = pair.force;
+  out.d2 = r >= h ? newton_d2 : spline_d2;
+  out.d3 = r >= h ? newton_d3 : spline_d3;
+  return out;
+}
+
 }  // namespace fountain::gravity

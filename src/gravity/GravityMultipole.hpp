@@ -52,4 +52,28 @@ inline NodeField node_field(const Vec3& d, double mass, const Quadrupole& q, dou
   return out;
 }
 
+// The same expansion with the softened potential p of pair spline length h (softened_pair's;
+// Newtonian beyond h), for a node that lies within some target's softening. With
+// d1, d2, d3 the radial derivatives of softened_derivatives_branch_free and
+// T = sum m |s|^2 (TreeNode::second_moment), the Taylor terms of sum m p(|d - s|) about the
+// centre of mass are
+//   phi = G (M p + d2 (d.Q.d) / 6 + T (d2 r^2 / 6 + d1 / 2))
+//   a   = -G ((M d1 + T (d3 r^2 / 6 + 5 d2 / 6) + d3 (d.Q.d) / 6) d + (d2 / 3) Q d).
+// The T terms vanish for the Newtonian potential (its Laplacian is zero), which is why the
+// traceless Q suffices there; inside the softening they do not. Beyond h this is node_field's
+// quadrupole expansion up to rounding.
+inline NodeField softened_node_field(const Vec3& d, double mass, const Quadrupole& q, double trace, double h,
+                                     double G) {
+  const double r2 = dot(d, d);
+  const auto k = softened_derivatives_branch_free(std::sqrt(r2), h, 1.0 / h);
+  const Vec3 qd{q[0] * d.x + q[3] * d.y + q[4] * d.z, q[3] * d.x + q[1] * d.y + q[5] * d.z,
+                q[4] * d.x + q[5] * d.y + q[2] * d.z};
+  const double dqd = dot(d, qd);
+  NodeField out;
+  const double along = mass * k.d1 + trace * (k.d3 * r2 / 6.0 + 5.0 * k.d2 / 6.0) + k.d3 * dqd / 6.0;
+  out.acceleration = -G * (along * d + (k.d2 / 3.0) * qd);
+  out.potential = G * (mass * k.potential + k.d2 * dqd / 6.0 + trace * (k.d2 * r2 / 6.0 + 0.5 * k.d1));
+  return out;
+}
+
 }  // namespace fountain::gravity

@@ -235,6 +235,8 @@ bool GravityTree::node_moments(std::int32_t n) {
   q = {};
   node.mass = 0.0;
   node.max_softening = 0.0;
+  node.min_softening = std::numeric_limits<double>::infinity();
+  node.second_moment = 0.0;
   node.side = node.built_side;
   Vec3 weighted;
   double reach = 0.0;  // how far from the centre, along an axis, the node's content extends
@@ -243,12 +245,18 @@ bool GravityTree::node_moments(std::int32_t n) {
       node.mass += mass_[k];
       weighted += mass_[k] * pos_[k];
       node.max_softening = std::max(node.max_softening, eps_[static_cast<std::size_t>(k)]);
+      node.min_softening = std::min(node.min_softening, eps_[static_cast<std::size_t>(k)]);
       reach = std::max(reach, farthest(pos_[k] - node.centre));
     }
     node.side = std::max(node.side, 2.0 * reach);
     // A massless node still needs a finite position for the distance tests.
     node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-    for (std::int32_t k = node.first; k < node.first + node.count; ++k) add_point_quadrupole(q, mass_[k], pos_[k] - node.com);
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+      const Vec3 s = pos_[k] - node.com;
+      add_point_quadrupole(q, mass_[k], s);
+      node.second_moment += mass_[k] * dot(s, s);
+    }
+    if (node.count == 0) node.min_softening = 0.0;
     return node.side > 2.0 * node.built_side;
   }
   const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
@@ -258,16 +266,20 @@ bool GravityTree::node_moments(std::int32_t n) {
     node.mass += child.mass;
     weighted += child.mass * child.com;
     node.max_softening = std::max(node.max_softening, child.max_softening);
+    node.min_softening = std::min(node.min_softening, child.min_softening);
     reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
     grown = grown || child.side != child.built_side;
   }
+  if (node.first_child >= 0 && !(node.min_softening <= node.max_softening)) node.min_softening = 0.0;
   // The margin covers the rounding of the sum above: a larger cube only opens more.
   if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
   node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
   for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
     const TreeNode& child = nodes_[c];
     for (int m = 0; m < 6; ++m) q[m] += child.quadrupole[m];
-    add_point_quadrupole(q, child.mass, child.com - node.com);
+    const Vec3 s = child.com - node.com;
+    add_point_quadrupole(q, child.mass, s);
+    node.second_moment += child.second_moment + child.mass * dot(s, s);
   }
   return node.side > 2.0 * node.built_side;
 }

@@ -45,22 +45,28 @@ struct WalkConfig {
   double theta = 0.5;         // Barnes-Hut angle, used while a target has no |a_old|
   OpeningCriterion criterion = OpeningCriterion::gadget2_monopole;  // the paper's (GADGET)
   MultipoleOrder expansion = MultipoleOrder::quadrupole;  // terms used for an accepted node
+  // Whether a node within some target's softening may be accepted (by the same criterion) and
+  // evaluated with the softened expansion (softened_node_field); otherwise it is opened down
+  // to its particles. Needs the quadrupole expansion.
+  bool softened_nodes = true;
   GravitySplit split{};
 };
 
 // One node. The traceless quadrupole is Q = sum m (3 s s^T - |s|^2 I) with s = x - com, stored
-// as xx, yy, zz, xy, xz, yz. The fields the walk reads come first, together (88 bytes).
+// as xx, yy, zz, xy, xz, yz. The fields the walk reads come first, together (96 bytes).
 struct TreeNode {
   Vec3 centre;  // geometric centre of the cube
   double side = 0.0;
   Vec3 com;
   double mass = 0.0;
   double max_softening = 0.0;  // largest Plummer-equivalent eps of the particles inside
+  double min_softening = 0.0;  // smallest
   std::int32_t first = 0;      // the node's particles are [first, first + count) in tree order
   std::int32_t count = 0;
   std::int32_t first_child = -1;  // -1 for a leaf; otherwise the next node in the array
   std::int32_t next = -1;         // node to visit after this one's subtree; -1 ends the walk
   std::array<double, 6> quadrupole{};
+  double second_moment = 0.0;  // sum m |x - com|^2: the trace the softened expansion needs
   double built_side = 0.0;  // the cube's side when built; a refit grows `side` from it
 };
 

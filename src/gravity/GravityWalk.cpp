@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <vector>
@@ -33,16 +34,19 @@ struct GravityTree::Group {
   // subnormals and overflow whatever the unit system.
   double accel_unit = 1.0;
   double h_max = 0.0;     // the largest target spline length
+  double h_min = 0.0;     // the smallest
   double a_crit = 0.0;    // alpha_force times the smallest |a_old|
   bool relative = true;   // false if any target lacks |a_old|: Barnes-Hut for the group
 };
 
-// What one walk accepted. Particles are split by whether the Newtonian force holds for the
-// whole group (beyond every pair's spline length), so that list is evaluated without branches.
+// What one walk accepted. Nodes and particles are split by whether the Newtonian force holds
+// for the whole group (beyond every pair's spline length): `nodes` and `far` are evaluated
+// with it, `soft_nodes` and `near` with the spline (per target, without branches).
 struct GravityTree::InteractionList {
-  std::vector<std::int32_t> nodes, far, near;
+  std::vector<std::int32_t> nodes, soft_nodes, far, near;
   void clear() {
     nodes.clear();
+    soft_nodes.clear();
     far.clear();
     near.clear();
   }
@@ -58,8 +62,8 @@ inline IndexKey index_key(std::int32_t i) { return {static_cast<float>(i >> 12),
 // The gap between the group's box and a point or a cube, per axis.
 inline double gap(double offset, double reach) { return std::max(std::fabs(offset) - reach, 0.0); }
 
-// An opened leaf whose cube lies wholly within the group's smallest spline length of the box
-// has only near particles; one whose cube is wholly beyond every pair's spline length (h, the
+// An opened leaf whose cube lies wholly within the group's largest target spline length of
+// its box has only near particles; one whose cube is wholly beyond every pair's spline length (h, the
 // largest of the group's and the leaf's) only far ones. Either way each particle's own test
 // would say the same, as the particles lie inside their leaf's cube (built so, and refitted
 // so); `slack` keeps rounding from deciding. Otherwise each particle is tested.
@@ -74,6 +78,13 @@ inline Bulk classify_leaf(const Vec3& box_half, double h_max, const TreeNode& le
 }
 }  // namespace
 
+// The widest a node within the softening may be against its distance (side / distance from
+// the box to its centre of mass). The relative criterion alone admits light nodes seen under
+// any angle (error ~ alpha |a_old| each); outside the softening such nodes are few, inside
+// it, in a collapsed disc's halo, they were the largest errors (1.4e-2 on the softened-disc
+// test, 4.8e-3 with this cap, as without softened nodes at all; docs/gravity.md).
+constexpr double kSoftenedNodeAngle = 0.5;
+
 // Every test is the one-target test applied to the nearest point of the group's box, so a
 // group of one decides exactly as a single target would, and each target of a larger group
 // meets every criterion at least as strictly as it would alone.
@@ -81,6 +92,8 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   list.clear();
   const double theta2 = config.theta * config.theta;
   const double cutoff = config.split.cutoff_radius();
+  const bool soft_allowed =
+      config.softened_nodes && config.expansion == MultipoleOrder::quadrupole && !config.split.enabled();
   // Above the rounding of any gap computed inside the root cube.
   const double slack = 1e-12 * (nodes_[0].side + std::fabs(nodes_[0].centre.x) + std::fabs(nodes_[0].centre.y) +
                                 std::fabs(nodes_[0].centre.z));
@@ -96,29 +109,37 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     const bool inside_enlarged = std::fabs(ox) < grown + g.half.x && std::fabs(oy) < grown + g.half.y &&
                                  std::fabs(oz) < grown + g.half.z;
     const double h = std::max(g.h_max, spline_length(node.max_softening));
-    bool open = true;
     if (config.split.enabled() && d2box > cutoff * cutoff) {
       n = node.next;  // beyond the short-range force: the mesh has it
       continue;
     }
-    // The softening test uses the distance to the node's cube, not to its centre of mass:
-    // an accepted node has every particle beyond every pair's spline length, so the
-    // Newtonian multipole expansion is the right one.
-    if (d2box >= h * h && !inside_enlarged) {
+    // A node beyond every pair's spline length from the whole box takes the Newtonian
+    // expansion; one within it (softened_nodes) the softened one, judged by the same criterion
+    // (the softened field's derivatives are no larger than the Newtonian ones at the same
+    // distance, so the criterion bounds its neglected terms at least as well), but only when
+    // it is also seen under a small angle (kSoftenedNodeAngle) and every target pairs with all
+    // its particles at one spline length per target: the node's softenings are all alike, or
+    // no larger than any target's.
+    const bool beyond = d2box >= h * h;
+    bool accept = false;
+    if (!inside_enlarged && (beyond || soft_allowed)) {
       const double cx = gap(node.com.x - g.centre.x, g.half.x), cy = gap(node.com.y - g.centre.y, g.half.y),
                    cz = gap(node.com.z - g.centre.z, g.half.z);
       const double r2 = cx * cx + cy * cy + cz * cz;
       const double l2 = node.side * node.side;
       if (!g.relative) {
-        open = l2 > theta2 * r2;
+        accept = l2 <= theta2 * r2;
       } else if (config.criterion == OpeningCriterion::gadget2_monopole) {
-        open = config.G * node.mass * l2 > g.a_crit * r2 * r2;  // G M l^2 / r^4 > alpha |a_old|
+        accept = config.G * node.mass * l2 <= g.a_crit * r2 * r2;  // G M l^2 / r^4 <= alpha |a_old|
       } else {
-        open = config.G * node.mass * l2 * node.side > g.a_crit * r2 * r2 * std::sqrt(r2);  // G M l^3 / r^5
+        accept = config.G * node.mass * l2 * node.side <= g.a_crit * r2 * r2 * std::sqrt(r2);  // G M l^3 / r^5
       }
+      if (accept && !beyond)
+        accept = l2 <= kSoftenedNodeAngle * kSoftenedNodeAngle * r2 &&
+                 (node.min_softening == node.max_softening || g.h_min >= spline_length(node.max_softening));
     }
-    if (!open) {
-      list.nodes.push_back(n);
+    if (accept) {
+      (beyond ? list.nodes : list.soft_nodes).push_back(n);
       n = node.next;
     } else if (node.first_child >= 0) {
       n = node.first_child;
@@ -204,6 +225,35 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
     nodes.template operator()<true>();
   else
     nodes.template operator()<false>();
+  // Nodes within some target's softening: softened_node_field's arithmetic, each target with
+  // its own pair spline length (the larger of its own and the node's).
+  for (const std::int32_t k : list.soft_nodes) {
+    const TreeNode& node = nodes_[k];
+    const float cx = static_cast<float>((node.com.x - g.centre.x) * unit_inv),
+                cy = static_cast<float>((node.com.y - g.centre.y) * unit_inv),
+                cz = static_cast<float>((node.com.z - g.centre.z) * unit_inv);
+    const float gm = static_cast<float>(G * node.mass * gm_scale);
+    const float trace = static_cast<float>(G * node.second_moment * q_scale);
+    float q[6];
+    for (int i = 0; i < 6; ++i) q[i] = static_cast<float>(G * node.quadrupole[i] * q_scale);
+    const float h_node = static_cast<float>(spline_length(node.max_softening) * unit_inv);
+    const float h_node_inv = 1.0f / h_node;
+    for (int t = 0; t < lanes; ++t) {
+      const float dx = g.xr[t] - cx, dy = g.yr[t] - cy, dz = g.zr[t] - cz;
+      const float r2 = dx * dx + dy * dy + dz * dz;
+      const float h = std::max(g.spline[t], h_node);
+      const auto f = softened_derivatives_branch_free(std::sqrt(r2), h, pair_inverse_spline_length(g.spline_inv[t], h_node_inv));
+      const float qx = q[0] * dx + q[3] * dy + q[4] * dz, qy = q[3] * dx + q[1] * dy + q[5] * dz,
+                  qz = q[4] * dx + q[5] * dy + q[2] * dz;
+      const float dqd = dx * qx + dy * qy + dz * qz;
+      const float along = gm * f.d1 + trace * (f.d3 * r2 * (1.0f / 6.0f) + f.d2 * (5.0f / 6.0f)) + f.d3 * dqd * (1.0f / 6.0f);
+      const float across = f.d2 * (1.0f / 3.0f);
+      ax[t] -= along * dx + across * qx;
+      ay[t] -= along * dy + across * qy;
+      az[t] -= along * dz + across * qz;
+      pot[t] += gm * f.potential + f.d2 * dqd * (1.0f / 6.0f) + trace * (f.d2 * r2 * (1.0f / 6.0f) + 0.5f * f.d1);
+    }
+  }
   for (const std::int32_t k : list.far) {
     const float px = static_cast<float>((pos_[k].x - g.centre.x) * unit_inv),
                 py = static_cast<float>((pos_[k].y - g.centre.y) * unit_inv),
@@ -321,6 +371,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
     g.n = static_cast<int>(std::min<std::size_t>(kGroupSize, order.size() - begin));
     Vec3 lo = targets[order[begin]].position, hi = lo;
     g.h_max = 0.0;
+    g.h_min = std::numeric_limits<double>::infinity();
     g.relative = true;
     double a_min = 0.0;
     for (int t = 0; t < g.n; ++t) {
@@ -337,6 +388,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
         hi[d] = std::max(hi[d], tg.position[d]);
       }
       g.h_max = std::max(g.h_max, spline_length(tg.softening));
+      g.h_min = std::min(g.h_min, spline_length(tg.softening));
       g.relative = g.relative && tg.a_old >= 0.0;
       a_min = t == 0 ? tg.a_old : std::min(a_min, tg.a_old);
     }
@@ -370,7 +422,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       GravityResult& r = results[order[begin + static_cast<std::size_t>(t)]];
       r.acceleration = {g.ax[t], g.ay[t], g.az[t]};
       r.potential = g.pot[t];
-      r.node_interactions = static_cast<std::int64_t>(list.nodes.size());
+      r.node_interactions = static_cast<std::int64_t>(list.nodes.size() + list.soft_nodes.size());
       r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - g.own[t];
     }
   };
