@@ -186,15 +186,22 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
   float ax[kGroupSize] = {}, ay[kGroupSize] = {}, az[kGroupSize] = {}, pot[kGroupSize] = {};
   // node_field's arithmetic over the group's targets; without the branch on the expansion
   // order inside, the loop over targets vectorises.
+  // A node's centre of mass relative to the group's centre, G M and G Q, in the float units.
+  struct ScaledNode {
+    float cx, cy, cz, gm, q[6];
+  };
+  auto scaled = [&](const TreeNode& node) {
+    ScaledNode n;
+    n.cx = static_cast<float>((node.com.x - g.centre.x) * unit_inv);
+    n.cy = static_cast<float>((node.com.y - g.centre.y) * unit_inv);
+    n.cz = static_cast<float>((node.com.z - g.centre.z) * unit_inv);
+    n.gm = static_cast<float>(G * node.mass * gm_scale);
+    for (int i = 0; i < 6; ++i) n.q[i] = static_cast<float>(G * node.quadrupole[i] * q_scale);
+    return n;
+  };
   auto nodes = [&]<bool kQuadrupole>() {
     for (const std::int32_t k : list.nodes) {
-      const TreeNode& node = nodes_[k];
-      const float cx = static_cast<float>((node.com.x - g.centre.x) * unit_inv),
-                  cy = static_cast<float>((node.com.y - g.centre.y) * unit_inv),
-                  cz = static_cast<float>((node.com.z - g.centre.z) * unit_inv);
-      const float gm = static_cast<float>(G * node.mass * gm_scale);
-      float q[6];
-      for (int i = 0; i < 6; ++i) q[i] = static_cast<float>(G * node.quadrupole[i] * q_scale);
+      const auto [cx, cy, cz, gm, q] = scaled(nodes_[k]);
       for (int t = 0; t < lanes; ++t) {
         const float dx = g.xr[t] - cx, dy = g.yr[t] - cy, dz = g.zr[t] - cz;
         const float r2 = dx * dx + dy * dy + dz * dz;
@@ -229,13 +236,8 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
   // its own pair spline length (the larger of its own and the node's).
   for (const std::int32_t k : list.soft_nodes) {
     const TreeNode& node = nodes_[k];
-    const float cx = static_cast<float>((node.com.x - g.centre.x) * unit_inv),
-                cy = static_cast<float>((node.com.y - g.centre.y) * unit_inv),
-                cz = static_cast<float>((node.com.z - g.centre.z) * unit_inv);
-    const float gm = static_cast<float>(G * node.mass * gm_scale);
+    const auto [cx, cy, cz, gm, q] = scaled(node);
     const float trace = static_cast<float>(G * node.second_moment * q_scale);
-    float q[6];
-    for (int i = 0; i < 6; ++i) q[i] = static_cast<float>(G * node.quadrupole[i] * q_scale);
     const float h_node = static_cast<float>(spline_length(node.max_softening) * unit_inv);
     const float h_node_inv = 1.0f / h_node;
     for (int t = 0; t < lanes; ++t) {
