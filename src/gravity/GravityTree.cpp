@@ -270,7 +270,7 @@ bool GravityTree::node_moments(std::int32_t n) {
     reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
     grown = grown || child.side != child.built_side;
   }
-  if (node.first_child >= 0 && !(node.min_softening <= node.max_softening)) node.min_softening = 0.0;
+  if (!(node.min_softening <= node.max_softening)) node.min_softening = 0.0;  // no child
   // The margin covers the rounding of the sum above: a larger cube only opens more.
   if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
   node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;

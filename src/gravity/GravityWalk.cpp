@@ -184,8 +184,6 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
   const double G = config.G;
   const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
   float ax[kGroupSize] = {}, ay[kGroupSize] = {}, az[kGroupSize] = {}, pot[kGroupSize] = {};
-  // node_field's arithmetic over the group's targets; without the branch on the expansion
-  // order inside, the loop over targets vectorises.
   // A node's centre of mass relative to the group's centre, G M and G Q, in the float units.
   struct ScaledNode {
     float cx, cy, cz, gm, q[6];
@@ -199,6 +197,8 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
     for (int i = 0; i < 6; ++i) n.q[i] = static_cast<float>(G * node.quadrupole[i] * q_scale);
     return n;
   };
+  // node_field's arithmetic over the group's targets; without the branch on the expansion
+  // order inside, the loop over targets vectorises.
   auto nodes = [&]<bool kQuadrupole>() {
     for (const std::int32_t k : list.nodes) {
       const auto [cx, cy, cz, gm, q] = scaled(nodes_[k]);
@@ -244,11 +244,13 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
       const float dx = g.xr[t] - cx, dy = g.yr[t] - cy, dz = g.zr[t] - cz;
       const float r2 = dx * dx + dy * dy + dz * dz;
       const float h = std::max(g.spline[t], h_node);
-      const auto f = softened_derivatives_branch_free(std::sqrt(r2), h, pair_inverse_spline_length(g.spline_inv[t], h_node_inv));
+      const float h_inv = pair_inverse_spline_length(g.spline_inv[t], h_node_inv);
+      const auto f = softened_derivatives_branch_free(std::sqrt(r2), h, h_inv);
       const float qx = q[0] * dx + q[3] * dy + q[4] * dz, qy = q[3] * dx + q[1] * dy + q[5] * dz,
                   qz = q[4] * dx + q[5] * dy + q[2] * dz;
       const float dqd = dx * qx + dy * qy + dz * qz;
-      const float along = gm * f.d1 + trace * (f.d3 * r2 * (1.0f / 6.0f) + f.d2 * (5.0f / 6.0f)) + f.d3 * dqd * (1.0f / 6.0f);
+      const float along =
+          gm * f.d1 + trace * (f.d3 * r2 * (1.0f / 6.0f) + f.d2 * (5.0f / 6.0f)) + f.d3 * dqd * (1.0f / 6.0f);
       const float across = f.d2 * (1.0f / 3.0f);
       ax[t] -= along * dx + across * qx;
       ay[t] -= along * dy + across * qy;
