@@ -8,6 +8,8 @@
 #include <fstream>
 #include <memory>
 
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include "core/Error.hpp"
@@ -64,6 +66,19 @@ namespace {
 
 volatile std::sig_atomic_t g_terminate = 0;
 extern "C" void on_sigterm(int) { g_terminate = 1; }
+
+// A launcher may hand us SIGTERM blocked (and even already pending): unblocking it once the
+// handler is in place means a stop request is never lost, however early it came.
+void catch_sigterm() {
+  struct sigaction action {};
+  action.sa_handler = on_sigterm;
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGTERM, &action, nullptr);
+  sigset_t term;
+  sigemptyset(&term);
+  sigaddset(&term, SIGTERM);
+  pthread_sigmask(SIG_UNBLOCK, &term, nullptr);
+}
 
 // A restart must continue the same problem: every parameter must match but the thread
 // count, the output directory (a run folder may be moved or copied and continued) and the
@@ -137,7 +152,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   } else {
     engine.initialise();
   }
-  std::signal(SIGTERM, on_sigterm);
+  catch_sigterm();
 
   io::SnapshotInfo info;
   info.box_size = config.space.box_size;
