@@ -18,13 +18,16 @@ inline bool load_neighbourhood(const StepContext& ctx, int ci, bool own_h_reache
   const Cell& a = ctx.space.cell(ci);
   std::size_t most = a.count;
   for (int n : ctx.space.neighbours(ci)) most += ctx.space.cell(n).count;
-  block.reset(most);
+  block.reset(most + kScanSlack);
   ActiveBox box;
   for (std::size_t i = a.first; i < a.first + a.count; ++i)
     if (ctx.is_active(i)) box.add(ctx.gas.x[i], ctx.gas.h[i]);
   if (box.empty) return false;
   for (std::size_t i = a.first; i < a.first + a.count; ++i) block.add(ctx.gas.x[i], ctx.gas.h[i] * ctx.gas.h[i], i);
   const double reach2 = box.h_max * box.h_max;
+  // Each neighbour cell is staged as plain arrays (shifted positions; h^2, or 0 where the
+  // loop must not read h) and filtered by the same scan as a group's candidates.
+  thread_local NeighbourBlock staged;
   for (int n : ctx.space.neighbours(ci)) {
     const Cell& b = ctx.space.cell(n);
     // Leaves are below a quarter of a periodic box, so one image shift serves the whole of b.
@@ -34,12 +37,10 @@ inline bool load_neighbourhood(const StepContext& ctx, int ci, bool own_h_reache
     const ActiveBox cell_box(b.lo + shift - margin, b.lo + b.width + shift + margin, 0.0);
     const double cell_d2 = box.distance2(cell_box);
     if (cell_d2 >= reach2 && !(own_h_reaches && cell_d2 < b.h_max * b.h_max)) continue;
-    for (std::size_t j = b.first; j < b.first + b.count; ++j) {
-      const Vec3 xj = ctx.gas.x[j] + shift;
-      const double d2 = box.distance2(xj);
-      const double hj2 = own_h_reaches ? ctx.gas.h[j] * ctx.gas.h[j] : 0.0;
-      block.add_if((d2 < reach2) | (d2 < hj2), xj, hj2, j);
-    }
+    staged.reset(b.count);
+    for (std::size_t j = b.first; j < b.first + b.count; ++j)
+      staged.add(ctx.gas.x[j] + shift, own_h_reaches ? ctx.gas.h[j] * ctx.gas.h[j] : 0.0, j);
+    block.append_near(staged.view(), staged.size(), box.lo, box.hi, reach2, own_h_reaches);
   }
   return true;
 }
@@ -50,9 +51,12 @@ inline constexpr std::size_t kGroupSize = 16;
 
 // Calls update(i, near) for every active particle i of `a`, group by group, with `near`
 // holding the candidates of `block` that can reach some active particle of i's group.
+// Forced inline (as are the loops' per-particle bodies) so that the AVX2 clones of the loops
+// that call it compile it too: a separate function would be built for plain x86-64 only.
 template <class Update>
-void for_each_active_group(const StepContext& ctx, const Cell& a, const NeighbourBlock& block, bool own_h_reaches,
-                           Update&& update) {
+[[gnu::always_inline]] inline void for_each_active_group(const StepContext& ctx, const Cell& a,
+                                                         const NeighbourBlock& block, bool own_h_reaches,
+                                                         Update&& update) {
   thread_local NeighbourBlock near;
   // The candidates' box, with their largest h when it counts: groups out of its reach skip the scan.
   ActiveBox reach;

@@ -1,5 +1,6 @@
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
+#include "core/VectorClones.hpp"
 #include "hydro/CellBlocks.hpp"
 
 namespace fountain::hydro {
@@ -9,36 +10,26 @@ namespace {
 
 // Adds to the sums of the active particles of `a` the contributions of the particles in
 // `block` (positions already relative-ready: plain differences are the nearest images).
-void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
+FOUNTAIN_VECTOR_CLONES void density_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
   GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
-  for_each_active_group(ctx, a, block, false, [&](std::size_t i, NeighbourBlock& near) {
+  thread_local DensityPairs q;  // the pairs of one particle at a time
+  for_each_active_group(ctx, a, block, false, [&](std::size_t i, NeighbourBlock& near) __attribute__((always_inline)) {
     const Vec3 xi = gas.x[i];
     const Vec3 vi = gas.v[i];
     const double hi = gas.h[i];
     const MsphState si = msph_state(gas, i);
-    DensityLanes lanes;
-    DensityPairs q;
-    int l = 0;
     const std::size_t n = near.within(xi, hi * hi, false);
+    q.reset(n);
     for (std::size_t m = 0; m < n; ++m) {
       const std::size_t k = near.hit[m];
       const std::size_t j = near.index[k];
       const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
       const Vec3 dv = vi - gas.v[j];
       if (p.msph && j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, near.r2[k], p)) continue;
-      q.dx[l] = dx.x, q.dy[l] = dx.y, q.dz[l] = dx.z, q.r2[l] = near.r2[k];
-      q.dvx[l] = dv.x, q.dvy[l] = dv.y, q.dvz[l] = dv.z, q.m[l] = gas.mass[j];
-      if (++l == kLanes) {
-        iact_density_lanes(q, hi, lanes);
-        l = 0;
-      }
+      q.add(dx, dv, near.r2[k], gas.mass[j]);
     }
-    if (l > 0) {
-      for (; l < kLanes; ++l) q.dx[l] = q.dy[l] = q.dz[l] = q.dvx[l] = q.dvy[l] = q.dvz[l] = q.m[l] = 0.0, q.r2[l] = hi * hi;
-      iact_density_lanes(q, hi, lanes);
-    }
-    const DensitySums s = lanes.total();
+    const DensitySums s = sum_density_pairs(q, hi);
     gas.rho[i] += s.rho;
     gas.wcount[i] += s.w;
     gas.wcount_dh[i] += s.w_dh;

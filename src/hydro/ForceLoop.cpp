@@ -1,8 +1,10 @@
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
+#include "core/VectorClones.hpp"
 #include "hydro/CellBlocks.hpp"
 
 namespace fountain::hydro {
@@ -28,53 +30,87 @@ void request_wake(GasParticles& gas, std::size_t j, int bin) {
   }
 }
 
-void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
+// Lists the pairs of particle i with the candidates near.hit[0 .. n): one plain loop with
+// every array behind a local pointer (through the thread's list the compiler reloaded each
+// array's address after every store).
+[[gnu::always_inline]] inline void list_force_pairs(const GasParticles& gas, const NeighbourBlock& near,
+                                                    const std::uint32_t* hit, std::size_t n, const Vec3& xi,
+                                                    const Vec3& vi, ForcePairs& q) {
+  q.reset(n);
+  double* __restrict dx = q.dx.data();
+  double* __restrict dy = q.dy.data();
+  double* __restrict dz = q.dz.data();
+  double* __restrict r2 = q.r2.data();
+  double* __restrict dvx = q.dvx.data();
+  double* __restrict dvy = q.dvy.data();
+  double* __restrict dvz = q.dvz.data();
+  double* __restrict m = q.m.data();
+  double* __restrict rho = q.rho.data();
+  double* __restrict h = q.h.data();
+  double* __restrict c = q.c.data();
+  double* __restrict pa = q.p_over_rho_a.data();
+  double* __restrict ir = q.inv_rho_2ma.data();
+  double* __restrict bal = q.balsara.data();
+  const double *nx = near.x.data(), *ny = near.y.data(), *nz = near.z.data(), *nr2 = near.r2.data();
+  const std::size_t* index = near.index.data();
+  const Vec3* v = gas.v.data();
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::size_t k = hit[p];
+    const std::size_t j = index[k];
+    dx[p] = xi.x - nx[k], dy[p] = xi.y - ny[k], dz[p] = xi.z - nz[k], r2[p] = nr2[k];
+    dvx[p] = vi.x - v[j].x, dvy[p] = vi.y - v[j].y, dvz[p] = vi.z - v[j].z;
+    m[p] = gas.mass[j], rho[p] = gas.rho[j], h[p] = gas.h[j], c[p] = gas.soundspeed[j];
+    pa[p] = gas.p_over_rho_a[j], ir[p] = gas.inv_rho_2ma[j], bal[p] = gas.balsara[j];
+  }
+  q.n = n;
+}
+
+FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
   GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
-  for_each_active_group(ctx, a, block, true, [&](std::size_t i, NeighbourBlock& near) {
+  const bool msph = p.msph, limiter = p.timestep_limiter;
+  const int limiter_bins = p.limiter_bins;
+  thread_local ForcePairs q;  // the pairs of one particle at a time
+  for_each_active_group(ctx, a, block, true, [&](std::size_t i, NeighbourBlock& near) __attribute__((always_inline)) {
     const ForceState fi = force_state(gas, i);
-    const MsphState si = msph_state(gas, i);
     const Vec3 xi = gas.x[i];
-    const int my_bin = gas.courant_bin[i];
-    int min_bin = kNoBin;
-    ForceLanes lanes;
-    ForcePairs q;
-    int l = 0;
     const std::size_t n = near.within(xi, fi.h * fi.h, true);
-    for (std::size_t m = 0; m < n; ++m) {
-      const std::size_t k = near.hit[m];
-      const std::size_t j = near.index[k];
-      if (j == i) continue;
-      const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
-      const Vec3 dv = fi.v - gas.v[j];
-      const double r2 = near.r2[k];
-      if (p.msph && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
-      q.dx[l] = dx.x, q.dy[l] = dx.y, q.dz[l] = dx.z, q.r2[l] = r2;
-      q.dvx[l] = dv.x, q.dvy[l] = dv.y, q.dvz[l] = dv.z;
-      q.m[l] = gas.mass[j], q.rho[l] = gas.rho[j], q.h[l] = gas.h[j], q.c[l] = gas.soundspeed[j];
-      q.p_over_rho_a[l] = gas.p_over_rho_a[j], q.inv_rho_2ma[l] = gas.inv_rho_2ma[j], q.balsara[l] = gas.balsara[j];
-      if (++l == kLanes) {
-        iact_force_lanes(fi, q, p, lanes);
-        l = 0;
+    // The partners, in place in the hit list: every hit but i itself and, under MSPH, the
+    // decoupled ones.
+    std::uint32_t* hit = near.hit.data();
+    std::size_t kept = 0;
+    if (msph) {
+      const MsphState si = msph_state(gas, i);
+      for (std::size_t m = 0; m < n; ++m) {
+        const std::size_t k = hit[m];
+        const std::size_t j = near.index[k];
+        if (j == i) continue;
+        const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
+        if (msph_decoupled(si, msph_state(gas, j), dx, fi.v - gas.v[j], near.r2[k], p)) continue;
+        hit[kept++] = static_cast<std::uint32_t>(k);
       }
-      if (p.timestep_limiter) {
-        const int bj = gas.time_bin[j];
-        min_bin = std::min(min_bin, bj);
-        if (bj > my_bin + p.limiter_bins) request_wake(gas, j, my_bin + p.limiter_bins);
+    } else {
+      for (std::size_t m = 0; m < n; ++m) {
+        const std::uint32_t k = hit[m];
+        hit[kept] = k;
+        kept += near.index[k] != i ? 1 : 0;
       }
     }
-    if (l > 0) {
-      for (; l < kLanes; ++l) {
-        q.dx[l] = q.dy[l] = q.dz[l] = q.dvx[l] = q.dvy[l] = q.dvz[l] = q.m[l] = q.c[l] = 0.0;
-        q.p_over_rho_a[l] = q.inv_rho_2ma[l] = q.balsara[l] = 0.0;
-        q.r2[l] = q.rho[l] = q.h[l] = 1.0;
-      }
-      iact_force_lanes(fi, q, p, lanes);
-    }
-    const ForceSums s = lanes.total();
+    list_force_pairs(gas, near, hit, kept, xi, fi.v, q);
+    const ForceSums s = sum_force_pairs(fi, q, p);
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
-    if (min_bin != kNoBin) gas.limit_bin[i] = static_cast<TimeBin>(std::min<int>(gas.limit_bin[i], min_bin + p.limiter_bins));
+    if (limiter && kept > 0) {
+      const int my_bin = gas.courant_bin[i];
+      int min_bin = kNoBin;
+      for (std::size_t m = 0; m < kept; ++m) {
+        const std::size_t j = near.index[hit[m]];
+        const int bj = gas.time_bin[j];
+        min_bin = std::min(min_bin, bj);
+        if (bj > my_bin + limiter_bins) request_wake(gas, j, my_bin + limiter_bins);
+      }
+      gas.limit_bin[i] = static_cast<TimeBin>(std::min<int>(gas.limit_bin[i], min_bin + limiter_bins));
+    }
   });
 }
 

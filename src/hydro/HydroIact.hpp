@@ -2,7 +2,9 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 
+#include "core/ScratchArray.hpp"
 #include "core/Vec3.hpp"
 #include "hydro/HydroParams.hpp"
 #include "hydro/Kernel.hpp"
@@ -156,11 +158,14 @@ inline void iact_force(const ForceState& i, const ForceState& j, const Vec3& dx,
 }
 
 // ---------------------------------------------------------------- four pairs at once
-// The loops call these on i's neighbours four at a time: the same arithmetic as iact_density
-// and iact_force, written without branches over plain arrays so the compiler vectorises it.
-// Each lane keeps its own sums, added up in a fixed order at the end, so results do not
-// depend on the machine's vector width. Unused lanes are padded with zero mass (and, for
-// density, r2 = h_i^2, which the kernel excludes).
+// The loops first list all the pairs of particle i, then sum them four at a time with
+// iact_density_lanes / iact_force_lanes: the same arithmetic as iact_density and iact_force,
+// written without branches over plain arrays so the compiler vectorises it, and with no
+// other work between batches so the square roots and divisions of one batch overlap those
+// of the next. Pair m goes to lane m % 4; each lane keeps its own sums, added up in a fixed
+// order at the end, so results do not depend on the machine's vector width. The last batch
+// is padded with pairs that add nothing (zero mass; for density r2 = h_i^2, which the
+// kernel excludes).
 inline constexpr int kLanes = 4;
 
 struct DensityLanes {
@@ -178,35 +183,63 @@ struct DensityLanes {
   }
 };
 
-// Neighbour data of four pairs (i, j): dx = x_i - x_j, dv = v_i - v_j.
+// The pairs (i, j) of one particle i for the density loop: dx = x_i - x_j, dv = v_i - v_j.
 struct DensityPairs {
-  double dx[kLanes], dy[kLanes], dz[kLanes], r2[kLanes], dvx[kLanes], dvy[kLanes], dvz[kLanes], m[kLanes];
+  ScratchArray<double> dx, dy, dz, r2, dvx, dvy, dvz, m;
+  std::size_t n = 0;
+
+  // Empties the list, with room for `most` pairs and the padding.
+  void reset(std::size_t most) {
+    n = 0;
+    for (auto* a : {&dx, &dy, &dz, &r2, &dvx, &dvy, &dvz, &m}) a->ensure(most + kLanes);
+  }
+  void add(const Vec3& d, const Vec3& dv, double r2_value, double mj) {
+    dx[n] = d.x, dy[n] = d.y, dz[n] = d.z, r2[n] = r2_value;
+    dvx[n] = dv.x, dvy[n] = dv.y, dvz[n] = dv.z, m[n] = mj;
+    ++n;
+  }
+  // Pads the last batch (h_i: i's smoothing length) and returns the padded length.
+  std::size_t pad(double hi) {
+    std::size_t k = n;
+    for (; k % kLanes != 0; ++k) dx[k] = dy[k] = dz[k] = dvx[k] = dvy[k] = dvz[k] = m[k] = 0.0, r2[k] = hi * hi;
+    return k;
+  }
 };
 
-// hi: i's smoothing length; pairs with r2 >= hi^2 add nothing.
-inline void iact_density_lanes(const DensityPairs& q, double hi, DensityLanes& s) {
+// The batch of pairs b .. b + 3; pairs with r2 >= hi^2 add nothing.
+[[gnu::always_inline]] inline void iact_density_lanes(const DensityPairs& q, std::size_t b, double hi, DensityLanes& s) {
   const double hi_inv = 1.0 / hi;
   const double hi2 = hi * hi;
   const double h3 = kernel::norm * hi_inv * hi_inv * hi_inv;
   const double h4 = h3 * hi_inv;
+  const double *qdx = q.dx.data() + b, *qdy = q.dy.data() + b, *qdz = q.dz.data() + b, *qr2 = q.r2.data() + b;
+  const double *qvx = q.dvx.data() + b, *qvy = q.dvy.data() + b, *qvz = q.dvz.data() + b, *qm = q.m.data() + b;
   for (int l = 0; l < kLanes; ++l) {
-    const double r = std::sqrt(q.r2[l]);
+    const double r = std::sqrt(qr2[l]);
     const double u = r * hi_inv;
     const double t = 1.0 - u;
     const bool inner = u < 0.5;
-    const bool inside = q.r2[l] < hi2;
+    const bool inside = qr2[l] < hi2;
     const double w = inside ? h3 * (inner ? 1.0 - 6.0 * u * u + 6.0 * u * u * u : 2.0 * t * t * t) : 0.0;
     const double dw = inside ? h4 * (inner ? -12.0 * u + 18.0 * u * u : -6.0 * t * t) : 0.0;
     const double inv_r = r > 0.0 ? 1.0 / r : 0.0;
-    s.rho[l] += q.m[l] * w;
+    s.rho[l] += qm[l] * w;
     s.w[l] += w;
     s.w_dh[l] += -(3.0 * w + r * dw) * hi_inv;
-    const double f = q.m[l] * dw * inv_r;
-    s.div[l] += f * (q.dvx[l] * q.dx[l] + q.dvy[l] * q.dy[l] + q.dvz[l] * q.dz[l]);
-    s.cx[l] += f * (q.dy[l] * q.dvz[l] - q.dz[l] * q.dvy[l]);
-    s.cy[l] += f * (q.dz[l] * q.dvx[l] - q.dx[l] * q.dvz[l]);
-    s.cz[l] += f * (q.dx[l] * q.dvy[l] - q.dy[l] * q.dvx[l]);
+    const double f = qm[l] * dw * inv_r;
+    s.div[l] += f * (qvx[l] * qdx[l] + qvy[l] * qdy[l] + qvz[l] * qdz[l]);
+    s.cx[l] += f * (qdy[l] * qvz[l] - qdz[l] * qvy[l]);
+    s.cy[l] += f * (qdz[l] * qvx[l] - qdx[l] * qvz[l]);
+    s.cz[l] += f * (qdx[l] * qvy[l] - qdy[l] * qvx[l]);
   }
+}
+
+// Particle i's density sums over its listed pairs (h_i: its smoothing length).
+[[gnu::always_inline]] inline DensitySums sum_density_pairs(DensityPairs& q, double hi) {
+  DensityLanes lanes;
+  const std::size_t end = q.pad(hi);
+  for (std::size_t b = 0; b < end; b += kLanes) iact_density_lanes(q, b, hi, lanes);
+  return lanes.total();
 }
 
 struct ForceLanes {
@@ -220,44 +253,80 @@ struct ForceLanes {
   }
 };
 
-// Neighbour data of four pairs for the force loop: j's prepared force inputs.
+// The pairs (i, j) of one particle i for the force loop, with j's prepared force inputs.
 struct ForcePairs {
-  double dx[kLanes], dy[kLanes], dz[kLanes], r2[kLanes], dvx[kLanes], dvy[kLanes], dvz[kLanes];
-  double m[kLanes], rho[kLanes], h[kLanes], c[kLanes], p_over_rho_a[kLanes], inv_rho_2ma[kLanes], balsara[kLanes];
+  ScratchArray<double> dx, dy, dz, r2, dvx, dvy, dvz;
+  ScratchArray<double> m, rho, h, c, p_over_rho_a, inv_rho_2ma, balsara;
+  std::size_t n = 0;
+
+  void reset(std::size_t most) {
+    n = 0;
+    for (auto* a : {&dx, &dy, &dz, &r2, &dvx, &dvy, &dvz, &m, &rho, &h, &c, &p_over_rho_a, &inv_rho_2ma, &balsara})
+      a->ensure(most + kLanes);
+  }
+  void add(const Vec3& d, const Vec3& dv, double r2_value, const ForceState& j) {
+    dx[n] = d.x, dy[n] = d.y, dz[n] = d.z, r2[n] = r2_value;
+    dvx[n] = dv.x, dvy[n] = dv.y, dvz[n] = dv.z;
+    m[n] = j.m, rho[n] = j.rho, h[n] = j.h, c[n] = j.c;
+    p_over_rho_a[n] = j.p_over_rho_a, inv_rho_2ma[n] = j.inv_rho_2ma, balsara[n] = j.balsara;
+    ++n;
+  }
+  std::size_t pad() {
+    std::size_t k = n;
+    for (; k % kLanes != 0; ++k) {
+      dx[k] = dy[k] = dz[k] = dvx[k] = dvy[k] = dvz[k] = m[k] = c[k] = 0.0;
+      p_over_rho_a[k] = inv_rho_2ma[k] = balsara[k] = 0.0;
+      r2[k] = rho[k] = h[k] = 1.0;
+    }
+    return k;
+  }
 };
 
-inline void iact_force_lanes(const ForceState& i, const ForcePairs& q, const HydroParams& p, ForceLanes& s) {
+[[gnu::always_inline]] inline void iact_force_lanes(const ForceState& i, const ForcePairs& q, std::size_t b, const HydroParams& p,
+                             ForceLanes& s) {
   const double hi_inv = 1.0 / i.h;
   const double alpha = p.viscosity_alpha;
+  const double *qdx = q.dx.data() + b, *qdy = q.dy.data() + b, *qdz = q.dz.data() + b, *qr2 = q.r2.data() + b;
+  const double *qvx = q.dvx.data() + b, *qvy = q.dvy.data() + b, *qvz = q.dvz.data() + b;
+  const double *qm = q.m.data() + b, *qrho = q.rho.data() + b, *qh = q.h.data() + b, *qc = q.c.data() + b;
+  const double *qpa = q.p_over_rho_a.data() + b, *qir = q.inv_rho_2ma.data() + b, *qbal = q.balsara.data() + b;
   for (int l = 0; l < kLanes; ++l) {
-    const double r2 = q.r2[l];
+    const double r2 = qr2[l];
     const double r = std::sqrt(r2);
     const double inv_r = r > 0.0 ? 1.0 / r : 0.0;
-    const double hj_inv = 1.0 / q.h[l];
+    const double hj_inv = 1.0 / qh[l];
     const double ui = r * hi_inv, uj = r * hj_inv;
     const double ti = 1.0 - ui, tj = 1.0 - uj;
     const double dwi = r < i.h ? kernel::norm * hi_inv * hi_inv * hi_inv * hi_inv *
                                      (ui < 0.5 ? -12.0 * ui + 18.0 * ui * ui : -6.0 * ti * ti)
                                : 0.0;
-    const double dwj = r < q.h[l] ? kernel::norm * hj_inv * hj_inv * hj_inv * hj_inv *
-                                        (uj < 0.5 ? -12.0 * uj + 18.0 * uj * uj : -6.0 * tj * tj)
-                                  : 0.0;
-    const double dw_mean_over_r = 0.5 * (dwi + dwj) * inv_r;
-    const double vr = q.dvx[l] * q.dx[l] + q.dvy[l] * q.dy[l] + q.dvz[l] * q.dz[l];
-    const double h_ij = 0.5 * (i.h + q.h[l]);
-    const double mu = vr < 0.0 ? h_ij * vr / (r2 + 0.01 * h_ij * h_ij) : 0.0;
-    const double c_ij = 0.5 * (i.c + q.c[l]);
-    const double visc = mu < 0.0 ? (-alpha * c_ij * mu + 2.0 * alpha * mu * mu) / (0.5 * (i.rho + q.rho[l])) *
-                                       (0.5 * (i.balsara + q.balsara[l]))
+    const double dwj = r < qh[l] ? kernel::norm * hj_inv * hj_inv * hj_inv * hj_inv *
+                                       (uj < 0.5 ? -12.0 * uj + 18.0 * uj * uj : -6.0 * tj * tj)
                                  : 0.0;
-    const double p_ij = q.p_over_rho_a[l] * i.inv_rho_2ma;
-    const double p_ji = i.p_over_rho_a * q.inv_rho_2ma[l];
-    const double f = q.m[l] * ((p_ij + p_ji) + visc) * dw_mean_over_r;
-    s.ax[l] -= q.dx[l] * f;
-    s.ay[l] -= q.dy[l] * f;
-    s.az[l] -= q.dz[l] * f;
-    s.du_dt[l] += q.m[l] * (p_ji + 0.5 * visc) * dw_mean_over_r * vr;
+    const double dw_mean_over_r = 0.5 * (dwi + dwj) * inv_r;
+    const double vr = qvx[l] * qdx[l] + qvy[l] * qdy[l] + qvz[l] * qdz[l];
+    const double h_ij = 0.5 * (i.h + qh[l]);
+    const double mu = vr < 0.0 ? h_ij * vr / (r2 + 0.01 * h_ij * h_ij) : 0.0;
+    const double c_ij = 0.5 * (i.c + qc[l]);
+    const double visc = mu < 0.0 ? (-alpha * c_ij * mu + 2.0 * alpha * mu * mu) / (0.5 * (i.rho + qrho[l])) *
+                                       (0.5 * (i.balsara + qbal[l]))
+                                 : 0.0;
+    const double p_ij = qpa[l] * i.inv_rho_2ma;
+    const double p_ji = i.p_over_rho_a * qir[l];
+    const double f = qm[l] * ((p_ij + p_ji) + visc) * dw_mean_over_r;
+    s.ax[l] -= qdx[l] * f;
+    s.ay[l] -= qdy[l] * f;
+    s.az[l] -= qdz[l] * f;
+    s.du_dt[l] += qm[l] * (p_ji + 0.5 * visc) * dw_mean_over_r * vr;
   }
+}
+
+// Particle i's force sums over its listed pairs.
+[[gnu::always_inline]] inline ForceSums sum_force_pairs(const ForceState& i, ForcePairs& q, const HydroParams& p) {
+  ForceLanes lanes;
+  const std::size_t end = q.pad();
+  for (std::size_t b = 0; b < end; b += kLanes) iact_force_lanes(i, q, b, p, lanes);
+  return lanes.total();
 }
 
 // ---------------------------------------------------------------- timestep

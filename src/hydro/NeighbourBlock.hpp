@@ -3,34 +3,12 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 
+#include "core/ScratchArray.hpp"
 #include "core/Vec3.hpp"
+#include "hydro/NeighbourScan.hpp"
 
 namespace fountain::hydro {
-
-// A grow-only array whose elements start uninitialised. A block is sized for the most
-// candidates a neighbourhood could hold, but only the pages actually written become resident
-// (a zero-filled std::vector touched all of them: ~20 B per particle of peak memory on two
-// threads in the 250k Sedov run).
-template <class T>
-class ScratchArray {
- public:
-  // Room for n elements; the contents are not kept when it grows.
-  void ensure(std::size_t n) {
-    if (n <= capacity_) return;
-    data_.reset(new T[n]);
-    capacity_ = n;
-  }
-  T& operator[](std::size_t k) { return data_[k]; }
-  const T& operator[](std::size_t k) const { return data_[k]; }
-  T* data() { return data_.get(); }
-  const T* data() const { return data_.get(); }
-
- private:
-  std::unique_ptr<T[]> data_;
-  std::size_t capacity_ = 0;
-};
 
 // Positions (as the periodic image nearest the target cell) and indices of the candidate
 // neighbours, so the inner loops scan short contiguous arrays.
@@ -55,60 +33,30 @@ struct NeighbourBlock {
     index[n_] = i;
     ++n_;
   }
-  // Adds the candidate when `keep`, without a branch (the filters that call this keep about
-  // half of what they see, in no pattern a branch predictor could learn).
-  void add_if(bool keep, const Vec3& p, double h2_value, std::size_t i) {
-    x[n_] = p.x;
-    y[n_] = p.y;
-    z[n_] = p.z;
-    h2[n_] = h2_value;
-    index[n_] = i;
-    n_ += keep ? 1 : 0;
-  }
   std::size_t size() const { return n_; }
 
-  // Squared distances from p to every candidate, in a loop the compiler can vectorise.
-  void distances_to(const Vec3& p) {
-    const std::size_t n = size();
-    r2.ensure(n);
-    hit.ensure(n);
-    const double* bx = x.data();
-    const double* by = y.data();
-    const double* bz = z.data();
-    double* out = r2.data();
-    for (std::size_t k = 0; k < n; ++k) {
-      const double dx = p.x - bx[k], dy = p.y - by[k], dz = p.z - bz[k];
-      out[k] = dx * dx + dy * dy + dz * dz;
-    }
+  // Appends the candidates of `in` (n of them) that scan_near_box keeps; the block must have
+  // room for them and kScanSlack more.
+  void append_near(const CandidateView& in, std::size_t n, const Vec3& lo, const Vec3& hi, double reach2,
+                   bool own_h_reaches) {
+    n_ += scan_near_box(in, n, lo, hi, reach2, own_h_reaches,
+                        {x.data() + n_, y.data() + n_, z.data() + n_, h2.data() + n_, index.data() + n_});
+  }
+
+  CandidateView view() const { return {x.data(), y.data(), z.data(), h2.data(), index.data()}; }
+  // Keeps the candidates of `block` that scan_near_box keeps.
+  void select_from(const NeighbourBlock& block, const Vec3& lo, const Vec3& hi, double reach2, bool own_h_reaches) {
+    reset(block.size() + kScanSlack);
+    append_near(block.view(), block.size(), lo, hi, reach2, own_h_reaches);
   }
 
   // Fills `hit` with the candidates closer to p than `reach2` (squared) or, when
-  // `own_h_reaches`, than their own h; without branches, so the scan stays cheap.
+  // `own_h_reaches`, than their own h, and r2 with every candidate's squared distance to p.
   std::size_t within(const Vec3& p, double reach2, bool own_h_reaches) {
-    distances_to(p);
     const std::size_t n = size();
-    // Two halves compacted side by side (independent counters), then joined: the same list
-    // in the same order, with half the loop-carried dependency (measured: 5% of a Sod step;
-    // four quarters were slower).
-    const std::size_t half = n / 2;
-    std::uint32_t* lo = hit.data();
-    std::uint32_t* hi = hit.data() + half;
-    std::size_t m0 = 0, m1 = 0;
-    auto keep = [&](std::size_t k) {
-      return static_cast<std::size_t>((r2[k] < reach2) | (own_h_reaches & (r2[k] < h2[k])));
-    };
-    for (std::size_t k = 0; k < half; ++k) {
-      lo[m0] = static_cast<std::uint32_t>(k);
-      hi[m1] = static_cast<std::uint32_t>(half + k);
-      m0 += keep(k);
-      m1 += keep(half + k);
-    }
-    if (n % 2 == 1) {
-      hi[m1] = static_cast<std::uint32_t>(n - 1);
-      m1 += keep(n - 1);
-    }
-    if (m0 < half) std::copy(hi, hi + m1, lo + m0);
-    return m0 + m1;
+    r2.ensure(n);
+    hit.ensure(n + kScanSlack);
+    return scan_within(x.data(), y.data(), z.data(), h2.data(), n, p, reach2, own_h_reaches, r2.data(), hit.data());
   }
 
  private:
@@ -149,15 +97,8 @@ struct ActiveBox {
 
 // Copies into `near` the candidates of `block` that can reach a particle in `box`: closer to the
 // box than its largest h (density: gather) or, when `own_h_reaches`, than their own h too (force).
-inline void select_near(const NeighbourBlock& block, const ActiveBox& box, bool own_h_reaches,
-                        NeighbourBlock& near) {
-  near.reset(block.size());
-  const double reach2 = box.h_max * box.h_max;
-  for (std::size_t k = 0; k < block.size(); ++k) {
-    const double d2 = box.distance2({block.x[k], block.y[k], block.z[k]});
-    near.add_if((d2 < reach2) | (own_h_reaches & (d2 < block.h2[k])), {block.x[k], block.y[k], block.z[k]}, block.h2[k],
-                block.index[k]);
-  }
+inline void select_near(const NeighbourBlock& block, const ActiveBox& box, bool own_h_reaches, NeighbourBlock& near) {
+  near.select_from(block, box.lo, box.hi, box.h_max * box.h_max, own_h_reaches);
 }
 
 }  // namespace fountain::hydro
