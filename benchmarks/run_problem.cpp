@@ -29,6 +29,8 @@ int main(int argc, char** argv) {
   app.add_option("--neighbours", neighbours);
   app.add_option("--t-end", t_end);
   app.add_option("--split", split, "space.cell_split_size");
+  double viscosity_alpha = HydroParams{}.viscosity_alpha;
+  app.add_option("--viscosity-alpha", viscosity_alpha, "hydro.viscosity_alpha (the paper's 1.3 by default)");
   app.add_option("--json", json_path);
   CLI11_PARSE(app, argc, argv);
 
@@ -50,6 +52,7 @@ int main(int argc, char** argv) {
   c.t_end = t_end;
   c.threads = threads;
   c.hydro.neighbours = neighbours;
+  c.hydro.viscosity_alpha = viscosity_alpha;
   c.hydro.msph = false;
   c.hydro.limiter_bins = 1;
   c.integration.dt_min = 1e-12;
