@@ -31,6 +31,8 @@ int main(int argc, char** argv) {
   app.add_option("--split", split, "space.cell_split_size");
   double viscosity_alpha = HydroParams{}.viscosity_alpha;
   app.add_option("--viscosity-alpha", viscosity_alpha, "hydro.viscosity_alpha (the paper's 1.3 by default)");
+  double neighbours_tolerance = HydroParams{}.neighbours_tolerance;
+  app.add_option("--neighbours-tolerance", neighbours_tolerance, "hydro.neighbours_tolerance");
   app.add_option("--json", json_path);
   CLI11_PARSE(app, argc, argv);
 
@@ -53,6 +55,7 @@ int main(int argc, char** argv) {
   c.threads = threads;
   c.hydro.neighbours = neighbours;
   c.hydro.viscosity_alpha = viscosity_alpha;
+  c.hydro.neighbours_tolerance = neighbours_tolerance;
   c.hydro.msph = false;
   c.hydro.limiter_bins = 1;
   c.integration.dt_min = 1e-12;
