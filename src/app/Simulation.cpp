@@ -100,7 +100,8 @@ void check_same_parameters(const io::RestartState& state, const ParameterFile& p
 
 std::string restart_path(const ParameterFile& params) { return params.text("output.directory") + "/restart.hdf5"; }
 
-RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int threads_override, bool restart) {
+RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int threads_override, bool restart,
+                          long long abandon_after_steps) {
   bool quiet = quiet_requested;
   const auto t_start = std::chrono::steady_clock::now();
   RunConfig config = RunConfig::from(params);
@@ -306,9 +307,14 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
       summary.terminated = true;
       break;
     }
+    if (abandon_after_steps > 0 && engine.steps() >= abandon_after_steps) {
+      if (io_rank) fmt::print(stderr, "abandoned after step {}, as asked: nothing more written\n", engine.steps());
+      summary.abandoned = true;
+      break;
+    }
   }
   engine.set_after_rebuild({});  // it refers to this function's locals
-  if (!summary.terminated) write();
+  if (!summary.terminated && !summary.abandoned) write();
   summary.steps = engine.steps();
   summary.final_time = engine.time();
   summary.ranks = engine.ranks();

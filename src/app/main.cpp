@@ -27,6 +27,11 @@ int main(int argc, char** argv) {
   run->add_option("-t,--threads", threads, "Worker threads (overrides run.threads)");
   run->add_flag("-q,--quiet", quiet, "No per-step progress lines");
   run->add_flag("-r,--restart", restart, "Continue from <output.directory>/restart.hdf5");
+  long long abandon_after = 0;
+  run->add_option("--abandon-after-steps", abandon_after,
+                  "Stop once the step count (as printed, continued across restarts) reaches this and write nothing "
+                  "more, as a run killed there would (to test restarts)")
+      ->check(CLI::PositiveNumber);
 
   auto* ic = app.add_subcommand("ic", "Write the initial conditions of a validation problem");
   std::string problem, out_path;
@@ -70,10 +75,11 @@ int main(int argc, char** argv) {
   try {
     if (*run) {
       const ParameterFile params = ParameterFile::load(param_path);
-      const RunSummary s = run_simulation(params, quiet, threads, restart);
+      const RunSummary s = run_simulation(params, quiet, threads, restart, abandon_after);
       // Stopped by SIGTERM after writing a restart file: EX_TEMPFAIL, so that job scripts can
       // tell a stopped run (continue it with --restart) from a finished one.
       if (s.terminated) return 75;
+      if (s.abandoned) return 0;
       if (mpi.rank() == 0)
         fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
