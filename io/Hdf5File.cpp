@@ -100,6 +100,16 @@ std::string hdf5_error_detail() {
   std::string detail;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collect_innermost, &detail);
   H5Eclear2(H5E_DEFAULT);
+  // The file drivers' messages span lines (time stamp, buffer address, byte counts): keep
+  // their first words and the system's reason, e.g. "file write failed: File too large".
+  const std::string key = "error message = '";
+  const std::size_t at = detail.find(key);
+  if (at != std::string::npos) {
+    const std::size_t end = detail.find('\'', at + key.size());
+    const std::size_t colon = detail.find(':');
+    if (end != std::string::npos && colon != std::string::npos && colon < at)
+      detail = detail.substr(0, colon) + ": " + detail.substr(at + key.size(), end - at - key.size());
+  }
   return detail;
 }
 

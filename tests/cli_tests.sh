@@ -101,6 +101,28 @@ with h5py.File('zero.hdf5', 'w') as f:
     params zero.hdf5 out; expect_error "zero.hdf5" ;;
   unwritable_output)
     echo "a file" > blocker; params good.hdf5 blocker/out; expect_error "blocker/out" ;;
+  disk_full)
+    # A full disk while writing: a clear error naming the file, exit status 2 and no crash, no
+    # partial file left behind, and nothing lost: the restart file written before is intact
+    # and the run continues from it once there is room. A file-size limit stands in for the
+    # full disk (with SIGXFSZ ignored, writes past it fail with EFBIG as they would with ENOSPC).
+    T_END=0.03 params good.hdf5 out "restart:
+  every_steps: 4"
+    sed -i 's/^  directory: out$/&\n  delta_time: 0.01/' params.yml
+    "$bin" run params.yml --abandon-after-steps 26 > first.txt 2>&1 || { cat first.txt; fail "first run"; }
+    [ -f out/restart.hdf5 ] || { cat first.txt; fail "no restart file was written"; }
+    cp out/restart.hdf5 restart_before.hdf5
+    set +e
+    (trap '' XFSZ; ulimit -f 64; exec "$bin" run params.yml -q --restart) > full.txt 2>&1
+    status=$?
+    set -e
+    [ "$status" -eq 2 ] || { cat full.txt; fail "exit status $status on a full disk, expected 2"; }
+    grep -q "cannot create .*out/.*hdf5: .*disk full" full.txt || { cat full.txt; fail "the message does not name the file and the cause"; }
+    ! ls out/*.tmp > /dev/null 2>&1 || fail "a partial file was left: $(ls out/*.tmp)"
+    cmp -s out/restart.hdf5 restart_before.hdf5 || fail "the restart file changed"
+    "$bin" run params.yml -q --restart > again.txt 2>&1 || { cat again.txt; fail "restart once there is room"; }
+    grep -q "^done" again.txt || { cat again.txt; fail "the restarted run did not finish"; }
+    echo "ok: $(head -c 160 full.txt)" ;;
   bad_parameter)
     params good.hdf5 out "hydro:
   gamma: soft"; expect_error "hydro.gamma" ;;
