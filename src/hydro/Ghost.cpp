@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/Error.hpp"
+#include "core/VectorClones.hpp"
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "hydro/NeighbourBlock.hpp"
@@ -16,20 +17,17 @@ namespace {
 // The first search radius for an unconverged h, in units of its current value.
 constexpr double kFirstReach = 1.25;
 
-struct Candidate {
-  Vec3 dx, dv;
-  double r2, m;
-};
-
 // Coupled particles within `radius` of particle i, from its own cell and then the
-// neighbour cells in their fixed order (so sums come out the same on every run).
-void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double radius,
-                       std::vector<Candidate>& out) {
-  out.clear();
+// neighbour cells in their fixed order (so sums come out the same on every run), listed as
+// pairs for the density loop's four-lane sums.
+void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double radius, DensityPairs& out) {
   const GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
   const MsphState si = msph_state(gas, i);
   const double r2max = radius * radius;
+  std::size_t most = ctx.space.cell(ci).count;
+  for (int cj : ctx.space.neighbours(ci)) most += ctx.space.cell(cj).count;
+  out.reset(most);
   auto scan = [&](int cj) {
     const Cell& b = ctx.space.cell(cj);
     // The image of particle i nearest the cell serves all of it (leaves are below a quarter
@@ -44,20 +42,15 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
       if (r2 >= r2max) continue;
       const Vec3 dv = gas.v[i] - gas.v[j];
       if (j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
-      out.push_back({dx, dv, r2, gas.mass[j]});
+      out.add(dx, dv, r2, gas.mass[j]);
     }
   };
   scan(ci);
   for (int cj : ctx.space.neighbours(ci)) scan(cj);
 }
 
-DensitySums sums_at(const std::vector<Candidate>& cand, double h) {
-  DensitySums s;
-  const double h2 = h * h, h_inv = 1.0 / h;
-  for (const auto& c : cand)
-    if (c.r2 < h2) iact_density(c.dx, c.dv, c.r2, h_inv, c.m, s);
-  return s;
-}
+// The density sums at smoothing length h over the listed pairs (those beyond h add nothing).
+FOUNTAIN_VECTOR_CLONES DensitySums sums_at(DensityPairs& pairs, double h) { return sum_density_pairs(pairs, h); }
 
 }  // namespace
 
@@ -69,7 +62,7 @@ void ghost(StepContext& ctx, int ci) {
   double h_limit = cell.r_cover - cell.dx_max - cell.dx_around;
   const bool limit_is_cover = !(p.h_max > 0.0 && p.h_max < h_limit);
   if (!limit_is_cover) h_limit = p.h_max;
-  thread_local std::vector<Candidate> cand;
+  thread_local DensityPairs cand;
 
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
