@@ -90,6 +90,11 @@ std::string join_path(const std::string& object, const std::string& name) {
 
 void silence_hdf5_errors() {
   static const bool done = [] {
+    // HDF5 keeps a file whose last write failed (a full disk) half-open, and its clean-up at
+    // exit then crashes on it. Every file here is closed by its owner, so that clean-up is
+    // not needed: a full disk ends in the error message, not a crash. (Effective only before
+    // the library's first use, which this is.)
+    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     return true;
   }();

@@ -2,8 +2,6 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
-#include <hdf5.h>
-
 #include <exception>
 
 #include "app/Simulation.hpp"
@@ -17,10 +15,6 @@
 
 int main(int argc, char** argv) {
   using namespace fountain;
-  // HDF5 keeps a file whose last write failed (a full disk) half-open, and its own clean-up
-  // at exit then crashes on it: every file is closed by its owner, so that clean-up is not
-  // needed, and a full disk ends in the error message and exit status 2, not a crash.
-  H5dont_atexit();
   tasks::MpiSession mpi(&argc, &argv);
   CLI::App app{"Fountain: SPH + tree gravity for galaxy formation (Marri & White 2003 physics)"};
   app.require_subcommand(1);
