@@ -55,6 +55,18 @@ expect_error() {
   echo "ok: $(cat out.txt)"
 }
 
+# stop_half_way TOTAL_STEPS COMMAND...: run B (into outB) stopped at half of TOTAL_STEPS as a
+# kill would stop it, deterministically (a SIGKILL timed against a run of a few milliseconds is
+# a race: the run may be over before it lands). It must leave a restart file, no final snapshot.
+stop_half_way() {
+  total=$1 half=$(($1 / 2)); shift
+  "$@" --abandon-after-steps "$half" > runB.txt 2>&1 || { cat runB.txt; fail "run B"; }
+  [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
+  [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was stopped"
+  grep -q "^abandoned after step $half," runB.txt || { cat runB.txt; fail "run B did not stop at step $half"; }
+  echo "stopped after $(grep -c '^step' runB.txt) of $total steps; $(grep 'restart file' runB.txt | tail -1)"
+}
+
 "$bin" ic sedov -n 8 -o good.hdf5 > /dev/null 2>&1 || fail "cannot write ICs"
 
 case "$case_name" in
@@ -192,14 +204,8 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     T_END=0.05 params ic.hdf5 outA "$extra"; cp params.yml params_mpi_whole.yml
     T_END=0.05 params ic.hdf5 outB "$extra"; cp params.yml params_mpi_killed.yml
     "$bin" run params_mpi_whole.yml > runA.txt 2>&1 || { cat runA.txt; fail "uninterrupted run"; }
-    total=$(grep -c '^step' runA.txt)
-    # Stopped half-way as a kill would stop it (a SIGKILL timed against a run this short is a
-    # race: the run may be over before it lands).
-    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml \
-      --abandon-after-steps $((total / 2)) > runB.txt 2>&1 || { cat runB.txt; fail "2-rank run"; }
-    [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
-    [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was stopped"
-    echo "stopped after $(grep -c '^step' runB.txt) of $total steps; $(grep 'restart file' runB.txt | tail -1)"
+    stop_half_way "$(grep -c '^step' runA.txt)" \
+      env ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml
     ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml --restart \
       > restart.txt 2>&1 || { cat restart.txt; fail "restart on 2 ranks failed"; }
     head -1 restart.txt
@@ -243,14 +249,8 @@ os.execv(sys.argv[1], sys.argv[1:])' "$bin" run params.yml > run.txt 2>&1
     T_END=0.03 params good.hdf5 outA "$extra"; cp params.yml paramsA.yml
     T_END=0.03 params good.hdf5 outB "$extra"; cp params.yml paramsB.yml
     "$bin" run paramsA.yml > runA.txt 2>&1 || { cat runA.txt; fail "uninterrupted run"; }
-    total=$(grep -c '^step' runA.txt)
-    # Stopped half-way as a kill would stop it, deterministically (a SIGKILL timed against a
-    # run this short is a race; the gravity variants below send one to runs long enough).
-    "$bin" run paramsB.yml --abandon-after-steps $((total / 2)) > runB.txt 2>&1 || { cat runB.txt; fail "run B"; }
-    [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
-    [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was stopped"
-    grep -q "^abandoned after step $((total / 2))," runB.txt || { cat runB.txt; fail "run B did not stop at step $((total / 2))"; }
-    echo "stopped after $(grep -c '^step' runB.txt) of $total steps; $(grep 'restart file' runB.txt | tail -1)"
+    # (The gravity variants below send a real SIGKILL, to runs long enough to be caught.)
+    stop_half_way "$(grep -c '^step' runA.txt)" "$bin" run paramsB.yml
     "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
     head -1 restart.txt
     "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
