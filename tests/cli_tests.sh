@@ -184,6 +184,14 @@ $sphere_physics" ;;
       grep "^ranks: $n" "run$n.txt" || { cat "run$n.txt"; fail "no rank summary from the $n-rank run"; }
       [ ! -e "out$n/snapshot_0002.hdf5" ] || fail "more snapshots than the 1-rank run"
       "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 "out$n/snapshot_0001.hdf5"
+      if [ "$case_name" = mpi_hydro_ranks ]; then
+        # Sod runs in halo mode: rank 0 must have held stale copies of some leaves (the
+        # snapshot comparison above then shows they never leaked into the results).
+        kept=$(sed -n "s/^halo mode: rank 0 kept \([0-9.]*\)%.*/\1/p" "run$n.txt")
+        [ -n "$kept" ] || { cat "run$n.txt"; fail "the $n-rank Sod run did not run in halo mode"; }
+        awk -v k="$kept" 'BEGIN { exit !(k < 100) }' || fail "rank 0 kept every leaf current ($kept%): no stale copy was tested"
+        echo "$n ranks: rank 0 kept $kept% of the leaves current"
+      fi
       if [ "$case_name" = mpi_uneven_ranks ]; then
         chosen=$(sed -n "s/^ranks: $n, cell owners chosen \([0-9]*\) times.*/\1/p" "run$n.txt")
         [ "$chosen" -gt 1 ] || fail "owners were chosen only $chosen times: no repartition mid-run"

@@ -204,6 +204,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   // Writes the state as it stands: right after a recut of the cells (restore() recuts the
   // same particles into the same cells).
   auto save_restart = [&] {
+    engine.gather_state();  // every rank calls it here; rank 0 then holds the whole state
     io::RestartState out;
     out.gas = engine.gas();
     out.dm = engine.dark_matter();
@@ -265,7 +266,10 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     d.thermal_locked = sf.thermal_locked;
     statistics->write(engine.time(), engine.steps(), d);
   };
-  if (statistics && !restart) write_statistics();
+  if (config.output.statistics_every > 0 && !restart) {
+    engine.gather_state();
+    if (statistics) write_statistics();
+  }
 
   while (!engine.finished()) {
     if (config.max_steps > 0 && engine.steps() >= config.max_steps) break;
@@ -278,7 +282,10 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
                                 engine.rank(), s.step,
                                 fmt::format("{}/timeline_step{:06d}{}.csv", config.output.directory, s.step, rank_suffix),
                                 exchange_interval());
-    if (statistics && (engine.steps() % config.output.statistics_every == 0 || engine.finished())) write_statistics();
+    if (config.output.statistics_every > 0 && (engine.steps() % config.output.statistics_every == 0 || engine.finished())) {
+      engine.gather_state();  // on every rank alike, though only rank 0 writes
+      if (statistics) write_statistics();
+    }
     if (engine.ti_current() == ti_out && !engine.finished()) {
       write();
       ++next_output;
@@ -323,6 +330,8 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   summary.messages_sent = engine.messages_sent();
   summary.graph_s = engine.graph_seconds();
   summary.exchange_s = engine.exchange_seconds();
+  summary.halo_mode = engine.halo_mode();
+  summary.held_share = engine.held_share();
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return summary;
 }

@@ -21,6 +21,8 @@ struct RunSummary {
   int partitions = 0;
   std::uint64_t bytes_sent = 0, messages_sent = 0;
   double graph_s = 0.0, exchange_s = 0.0;  // this rank: in task graphs, in the exchanges after them
+  bool halo_mode = false;
+  double held_share = 1.0;  // of the leaves, kept current by this rank (Engine::held_share)
 };
 
 // Runs the parameter file's problem to run.t_end, or continues it from its restart file

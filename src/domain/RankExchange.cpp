@@ -1,5 +1,6 @@
 #include "domain/RankExchange.hpp"
 
+#include <cstring>
 #include <deque>
 #include <stdexcept>
 
@@ -106,6 +107,41 @@ std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>
   return out;
 }
 
+std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buffer>& to) const {
+  const auto n = static_cast<std::size_t>(size_);
+  if (to.size() != n) throw std::logic_error("alltoall needs one buffer per rank");
+  std::vector<long long> out_sizes(n), in_sizes(n);
+  for (std::size_t r = 0; r < n; ++r)
+    out_sizes[r] = r == static_cast<std::size_t>(rank_) ? 0 : static_cast<long long>(to[r].size());
+  check(MPI_Alltoall(out_sizes.data(), 1, MPI_LONG_LONG, in_sizes.data(), 1, MPI_LONG_LONG, impl_->comm),
+        "Alltoall(sizes)");
+  std::vector<int> send_counts(n), send_offsets(n), recv_counts(n), recv_offsets(n);
+  std::size_t out_total = 0, in_total = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    send_counts[r] = as_count(static_cast<std::size_t>(out_sizes[r]));
+    send_offsets[r] = as_count(out_total);
+    out_total += static_cast<std::size_t>(out_sizes[r]);
+    recv_counts[r] = as_count(static_cast<std::size_t>(in_sizes[r]));
+    recv_offsets[r] = as_count(in_total);
+    in_total += static_cast<std::size_t>(in_sizes[r]);
+  }
+  // MPI wants one contiguous send buffer.
+  Buffer out(out_total);
+  for (std::size_t r = 0; r < n; ++r)
+    if (send_counts[r] > 0) std::memcpy(out.data() + send_offsets[r], to[r].data(), to[r].size());
+  if (scattered_.size() < in_total) scattered_.resize(in_total);
+  check(MPI_Alltoallv(out.data(), send_counts.data(), send_offsets.data(), MPI_BYTE, scattered_.data(),
+                      recv_counts.data(), recv_offsets.data(), MPI_BYTE, impl_->comm),
+        "Alltoallv");
+  std::vector<std::span<const char>> in(n);
+  for (std::size_t r = 0; r < n; ++r)
+    in[r] = std::span<const char>(scattered_.data() + recv_offsets[r], static_cast<std::size_t>(recv_counts[r]));
+  std::lock_guard lock(mutex_);
+  traffic_.bytes += out_total;
+  for (std::size_t r = 0; r < n; ++r) traffic_.messages += send_counts[r] > 0 ? 1 : 0;
+  return in;
+}
+
 int RankExchange::post_recv(int source, int tag, std::size_t bytes) {
   auto& p = impl_->recvs.emplace_back();
   p.data.resize(bytes);
@@ -175,6 +211,7 @@ bool RankExchange::any(bool) const { no_mpi(); }
 long long RankExchange::sum(long long) const { no_mpi(); }
 void RankExchange::min(std::span<std::int8_t>) const { no_mpi(); }
 std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>) const { no_mpi(); }
+std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buffer>&) const { no_mpi(); }
 int RankExchange::post_recv(int, int, std::size_t) { no_mpi(); }
 void RankExchange::test_recvs(std::span<const int>, std::vector<int>&) { no_mpi(); }
 const RankExchange::Buffer& RankExchange::wait_recv(int) { no_mpi(); }

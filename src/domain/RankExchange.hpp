@@ -33,6 +33,9 @@ class RankExchange {
   // Every rank's buffer, indexed by rank (this rank's own included): views into storage
   // kept and reused by the exchange, valid until its next allgather.
   std::vector<std::span<const char>> allgather(std::span<const char> mine) const;
+  // Each rank's buffer `to[q]` goes to rank q alone (this rank's own is skipped): what every
+  // rank sent to this one, indexed by sender, as views valid until the next alltoall.
+  std::vector<std::span<const char>> alltoall(const std::vector<Buffer>& to) const;
 
   // Point to point: receives are posted before the tasks that need them run (their handle
   // is an index), sends are posted by tasks and completed together once the graph is done.
@@ -60,6 +63,7 @@ class RankExchange {
   mutable std::mutex mutex_;  // guards the send list and the traffic counts
   mutable Traffic traffic_;
   mutable std::vector<char> gathered_;  // reused by allgather, so large exchanges do not fault in fresh pages
+  mutable std::vector<char> scattered_;  // reused by alltoall, likewise
 };
 
 }  // namespace fountain::domain

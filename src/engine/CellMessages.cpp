@@ -45,6 +45,31 @@ using PackFields = FieldSlices<MessageWriter>;
 using UnpackFields = FieldSlices<MessageReader>;
 
 template <class F>
+void recut_fields(GasParticles& g, F&& f) {
+  f(g.x); f(g.h); f(g.v_full); f(g.time_bin); f(g.ti_begin);
+}
+
+// One particle at a time, field by field, for scattered indices.
+template <class Stream>
+struct FieldPicks {
+  static constexpr bool kPack = std::is_same_v<Stream, MessageWriter>;
+  Stream& s;
+  std::span<const std::size_t> indices;
+  template <class T>
+  void operator()(std::vector<T>& f) const {
+    auto* bytes = [&] {
+      if constexpr (kPack) return s.grow(indices.size() * sizeof(T));
+      else return s.take(indices.size() * sizeof(T));
+    }();
+    for (std::size_t i : indices) {
+      if constexpr (kPack) std::memcpy(bytes, &f[i], sizeof(T));
+      else std::memcpy(&f[i], bytes, sizeof(T));
+      bytes += sizeof(T);
+    }
+  }
+};
+
+template <class F>
 void ghost_fields(GasParticles& g, F&& f) {
   f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
   f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
@@ -69,6 +94,34 @@ void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, Collis
   cell = sent;
   gas.for_each_field(UnpackFields{r, cell.first, cell.count, gas_moved, &gas.wake_bin});
   dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved});
+}
+
+void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved) {
+  const Cell& cell = space.cell(c);
+  halo_step_fields(gas, PackFields{w, cell.first, cell.count, moved});
+}
+
+void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved) {
+  const Cell& cell = space.cell(c);
+  halo_step_fields(gas, UnpackFields{r, cell.first, cell.count, moved});
+}
+
+void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
+  const Cell& cell = space.cell(c);
+  recut_fields(gas, PackFields{w, cell.first, cell.count});
+}
+
+void unpack_recut_inputs(MessageReader& r, const Space& space, GasParticles& gas, int c) {
+  const Cell& cell = space.cell(c);
+  recut_fields(gas, UnpackFields{r, cell.first, cell.count});
+}
+
+void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
+  gas.for_each_field(FieldPicks<MessageWriter>{w, indices});
+}
+
+void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices) {
+  gas.for_each_field(FieldPicks<MessageReader>{r, indices});
 }
 
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c) {

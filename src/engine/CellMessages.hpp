@@ -1,6 +1,7 @@
 // What ranks send each other about a cell: its whole state, its ghost's results, its feedback sites; packed as bytes.
 #pragma once
 #include <cstddef>
+#include <cstdint>
 #include <cstring>
 #include <span>
 #include <stdexcept>
@@ -80,6 +81,44 @@ void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, Co
                      std::span<const char> gas_moved, std::span<const char> dm_moved);
 void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
                        std::span<const char> gas_moved, std::span<const char> dm_moved);
+
+// What a step changes in a leaf's own record (the rest stands from one recut to the next):
+// sent by its owner to every rank, so that all take the same decisions (next time, recut).
+struct CellUpdate {
+  double h_max = 0.0, v_max = 0.0, dx_max = 0.0, radiated = 0.0;
+  std::int64_t ti_drift = 0, ti_end_min = 0;
+  static CellUpdate of(const Cell& c) { return {c.h_max, c.v_max, c.dx_max, c.radiated, c.ti_drift, c.ti_end_min}; }
+  void apply_to(Cell& c) const {
+    c.h_max = h_max, c.v_max = v_max, c.dx_max = dx_max, c.radiated = radiated;
+    c.ti_drift = ti_drift, c.ti_end_min = ti_end_min;
+  }
+};
+
+// The gas fields that a step of a run without gravity and star formation changes other than
+// by the drift (which every rank holding a copy repeats alike). The rest stay as they are
+// between recuts in such a run: identity and masses (and the star formation fields) do not
+// change, positions change by the drift alone, and gravity's fields are unused. Listed
+// field by field so that a field added to GasParticles must be placed (a test checks).
+template <class F>
+void halo_step_fields(GasParticles& g, F&& f) {
+  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.h); f(g.rho); f(g.rho_msph); f(g.h_msph); f(g.wcount);
+  f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
+  f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool); f(g.time_bin); f(g.ti_begin); f(g.courant_bin); f(g.limit_bin);
+}
+
+// The halo_step_fields of leaf c's gas particles flagged in `moved`, without the cell's
+// record: what its owner's tasks changed, for the ranks that hold a copy.
+void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved);
+void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved);
+
+// What a recut reads of leaf c's gas (positions, h, v_full) and what the rebuild then reads
+// (the time bins and step starts), so that every rank recuts alike.
+void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c);
+void unpack_recut_inputs(MessageReader& r, const Space& space, GasParticles& gas, int c);
+
+// Every field of the gas particles at `indices` (in that order).
+void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);
+void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices);
 
 // What leaf c's ghost computed, which other cells' force loops read.
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c);

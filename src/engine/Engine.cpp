@@ -47,6 +47,9 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
   ranks_ = domain::RankExchange::world();
   if (ranks_) rank_ = ranks_->rank();
+  // Gravity reads every particle (the tree), and star formation's spawning and feedback read
+  // and change particles anywhere: those runs keep every rank's copy whole.
+  halo_mode_ = ranks_ && !config_.gravity.enabled && !config_.star_formation.enabled;
   if (config_.star_formation.enabled) setup_star_formation();
   guess_smoothing_lengths();
 }
@@ -100,12 +103,28 @@ void Engine::guess_smoothing_lengths() {
 
 void Engine::rebuild() {
   // Every particle must sit at the current time before cells are recut.
-  drift_all();
+  drift_current();
   remove_dissolved();
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
   const ForEach for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); };
-  space_.recut(gas_, dm_, for_each);
+  // In halo mode every rank recuts alike from the owners' positions; then each particle that
+  // a rank now holds but held no current copy of comes from the owner of the leaf it was in.
+  const bool migrate = halo_mode_ && !all_current_ && !space_.leaves().empty();
+  std::vector<std::size_t> order;
+  std::vector<int> old_leaf, old_owner;
+  std::vector<std::vector<int>> old_holders;
+  if (migrate) {
+    share_recut_inputs();
+    old_leaf.assign(gas_.size(), -1);
+    for (int c : space_.leaves()) {
+      const Cell& cell = space_.cell(c);
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) old_leaf[i] = c;
+    }
+    old_owner = owner_;
+    old_holders = std::move(holders_);
+  }
+  space_.recut(gas_, dm_, for_each, migrate ? &order : nullptr);
   ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
   if (ranks_) assign_owners(measured);
@@ -139,6 +158,10 @@ void Engine::rebuild() {
   } else {
     space_.find_neighbours(for_each);
     build_graph();
+  }
+  if (halo_mode_) {
+    find_holders();
+    if (migrate) migrate_after_recut(order, old_leaf, old_owner, old_holders);
   }
   rebuild_pending_ = false;
 }
@@ -251,19 +274,32 @@ void Engine::build_graph() {
   graph_.finalize();
 }
 
-void Engine::drift_all() {
+void Engine::drift_current() {
   ctx_->ti_current = ti_current_;
   const auto& leaves = space_.leaves();
   if (leaves.empty()) return;  // before the first rebuild: nothing has moved
   StepContext& ctx = *ctx_;
-  executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l]); });
+  if (!halo_mode_ || all_current_) {
+    executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l]); });
+    return;
+  }
+  std::vector<int> mine;
+  for (int c : leaves)
+    if (held_[static_cast<std::size_t>(c)]) mine.push_back(c);
+  executor_.for_each(mine.size(), [&](std::size_t l) { integration::drift(ctx, mine[l]); });
+}
+
+void Engine::drift_all() {
+  drift_current();
+  gather_state();
 }
 
 std::size_t Engine::activate(Phase phase) {
   const auto& leaves = space_.leaves();
   const std::size_t ncells = space_.cells().size();
   cell_active_.assign(ncells, 0);
-  std::vector<char> needs_drift(ncells, 0);
+  std::vector<char>& needs_drift = drifted_;
+  needs_drift.assign(ncells, 0);
   std::size_t active_particles = 0;
   // Gravity's tree needs every particle at the current time.
   const bool gravity = config_.gravity.enabled && phase != Phase::Density;
@@ -283,17 +319,20 @@ std::size_t Engine::activate(Phase phase) {
   for (int c : leaves)
     if (cell_active_[c]) {
       const Cell& cell = space_.cell(c);
+      // In halo mode only the owner's count is sure (other copies may be stale).
+      const bool count = !halo_mode_ || mine(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
         const bool a = ctx_->is_active(i);
-        active_particles += a ? 1 : 0;
+        active_particles += a && count ? 1 : 0;
         if (ranks_) gas_moved_[i] = a;
       }
       for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
         const bool a = ctx_->is_active_dm(i);
-        active_particles += a ? 1 : 0;
+        active_particles += a && count ? 1 : 0;
         if (ranks_) dm_moved_[i] = a;
       }
     }
+  if (halo_mode_) active_particles = static_cast<std::size_t>(ranks_->sum(static_cast<long long>(active_particles)));
   // Only the tasks of active cells (and the drifts of their neighbours) are listed for the
   // executor; every ordering between them is a direct dependency or runs through a listed
   // chain (docs/design.md), so nothing else needs to be visited.
@@ -329,7 +368,8 @@ std::size_t Engine::activate(Phase phase) {
       auto& task = graph_.task(t);
       if (task.type == types_.send) task.active = exchange && !send_to_[static_cast<std::size_t>(c)].empty();
       else if (task.type == types_.recv) task.active = exchange && need_recv_[static_cast<std::size_t>(c)];
-      else task.active = task.type == types_.drift || (cell_active_[c] && mine(c) && allowed(task.type));
+      else if (task.type == types_.drift) task.active = !halo_mode_ || held_[static_cast<std::size_t>(c)];
+      else task.active = cell_active_[c] && mine(c) && allowed(task.type);
       if (task.active) step_tasks_.push_back(t);
     }
   }
@@ -482,6 +522,7 @@ void Engine::rebuild_now() {
 
 void Engine::restore(IntegerTime ti_current, long long steps) {
   initialised_ = true;
+  all_current_ = true;  // every rank read the same file
   ti_current_ = ti_current;
   steps_ = steps;
   rebuild_now();
@@ -491,7 +532,13 @@ void Engine::wake_requested() {
   if (!config_.hydro.timestep_limiter) return;
   StepContext& ctx = *ctx_;
   const auto& leaves = space_.leaves();
-  executor_.for_each(leaves.size(), [&](std::size_t l) { integration::wake(ctx, leaves[l]); });
+  if (halo_mode_) {
+    // The owners woke their leaves in the exchange after the graph (exchange_halo); what the
+    // undone kicks radiated is added here, as one rank adds it.
+    for (int c : leaves) space_.cell(c).radiated = wake_radiated_[static_cast<std::size_t>(c)];
+  } else {
+    executor_.for_each(leaves.size(), [&](std::size_t l) { integration::wake(ctx, leaves[l]); });
+  }
   collect_radiated();
 }
 

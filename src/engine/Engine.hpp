@@ -134,6 +134,17 @@ class Engine {
   // The exchanges after the last graph, in ns since it began ({0, 0} when running alone).
   std::pair<std::int64_t, std::int64_t> last_exchange_ns() const { return last_exchange_ns_; }
   double exchange_seconds() const { return exchange_s_; }
+  // Whether this run keeps on each rank only its own leaves and their neighbours current
+  // (MPI runs without gravity and star formation: docs/design.md, "Halo mode").
+  bool halo_mode() const { return halo_mode_; }
+  // In halo mode, the share of the leaves this rank kept current, averaged over the recuts
+  // (1 otherwise): below 1, it held stale copies of the rest.
+  double held_share() const { return leaves_seen_ > 0 ? static_cast<double>(leaves_held_) / static_cast<double>(leaves_seen_) : 1.0; }
+  // Brings every particle on every rank up to date with its owner's copy (collective: every
+  // rank calls it at the same point). drift_all() calls it; so must anything that reads the
+  // whole state between steps across ranks (restart files, statistics). Free when alone, and
+  // when nothing changed since the last call.
+  void gather_state();
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
@@ -142,6 +153,7 @@ class Engine {
  private:
   enum class Phase { Density, Hydro, Full };
   void rebuild();
+  void drift_current();  // every leaf this rank keeps current, to ti_current_
   void converge_density(Phase phase);
   void wake_requested();
   void collect_radiated();  // adds the cells' radiated energy of this step to the total
@@ -160,12 +172,19 @@ class Engine {
   void poll_receives(std::span<const int> waiting, std::vector<int>& opened);  // the recv gates
   void sync_owned_cells(bool gas_cells_only);  // every rank's active cells to every other rank
   void sync_feedback_sites();
-  // Each rank's active leaves (with gas, if asked), packed by `pack`, to every other rank.
+  // Each rank's active leaves (every leaf if asked; with gas, if asked), packed by `pack`, to every other rank.
   template <class Pack, class Unpack>
   void exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
-                              const char* what);
+                              const char* what, bool every_leaf = false);
   void finish_exchanges();
   void add_measured_costs();
+  // Halo mode.
+  void find_holders();
+  void share_recut_inputs();
+  void migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
+                           const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders);
+  void exchange_halo();
+  bool holds(int r, int c) const;
 
   RunConfig config_;
   GasParticles gas_;
@@ -215,6 +234,14 @@ class Engine {
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
+  bool halo_mode_ = false;
+  bool all_current_ = true;                 // every particle here as its owner has it
+  std::vector<std::vector<int>> holders_;   // per leaf: the ranks keeping it current (sorted)
+  std::vector<char> held_;                  // per cell: this rank keeps it current
+  long long leaves_held_ = 0, leaves_seen_ = 0;  // summed over the recuts
+  std::vector<char> drifted_;               // per cell: drifted in this run of the graph
+  std::vector<double> wake_radiated_;       // per cell: energy radiated by the wake's undoing of kicks
+  std::vector<std::vector<char>> to_rank_;  // halo mode's messages, one per rank, reused
 };
 
 }  // namespace fountain

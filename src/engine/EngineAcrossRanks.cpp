@@ -160,12 +160,12 @@ void Engine::post_receives() {
 
 template <class Pack, class Unpack>
 void Engine::exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
-                                    const char* what) {
+                                    const char* what, bool every_leaf) {
   // Every rank knows every leaf's owner and activity, so each reads the others' messages
   // leaf by leaf without being told which leaves they hold.
   auto sends = [&](int c, int r) {
     const auto uc = static_cast<std::size_t>(c);
-    return cell_active_[uc] && owner_[uc] == r && (!gas_leaves_only || space_.cell(c).count > 0);
+    return (every_leaf || cell_active_[uc]) && owner_[uc] == r && (!gas_leaves_only || space_.cell(c).count > 0);
   };
   buffer.clear();  // keeps its capacity from step to step
   MessageWriter w(buffer);
@@ -196,14 +196,34 @@ void Engine::sync_feedback_sites() {
       "feedback sites");
 }
 
+void Engine::share_recut_inputs() {
+  // The recut reads positions, h and v_full of every particle, and the rebuild then the time
+  // bins: every rank must see the owners' values to cut the same cells.
+  exchange_active_leaves(
+      false, sync_buffer_, [&](MessageWriter& w, int c) { pack_recut_inputs(w, space_, gas_, c); },
+      [&](MessageReader& r, int c) { unpack_recut_inputs(r, space_, gas_, c); }, "recut inputs", true);
+}
+
+void Engine::gather_state() {
+  if (!halo_mode_ || all_current_ || space_.leaves().empty()) return;
+  exchange_active_leaves(
+      false, sync_buffer_, [&](MessageWriter& w, int c) { pack_cell_state(w, space_, gas_, dm_, c, {}, {}); },
+      [&](MessageReader& r, int c) { unpack_cell_state(r, space_, gas_, dm_, c, {}, {}); }, "whole state", true);
+  all_current_ = true;
+}
+
 void Engine::finish_exchanges() {
   const auto t0 = std::chrono::steady_clock::now();
   ranks_->finish();
   add_measured_costs();
   // What each rank's tasks changed reaches every other rank; then the decisions every rank
   // must take alike (recut the cells, shorten whose steps) are made from the same data.
-  sync_owned_cells(false);
-  if (config_.hydro.timestep_limiter) ranks_->min(gas_.wake_bin);
+  if (halo_mode_) {
+    exchange_halo();
+  } else {
+    sync_owned_cells(false);
+    if (config_.hydro.timestep_limiter) ranks_->min(gas_.wake_bin);
+  }
   ctx_->cover_exceeded = ranks_->any(ctx_->cover_exceeded.load());
   ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));
   exchange_s_ += seconds_since(t0);

@@ -90,7 +90,8 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach
   find_neighbours(for_each);
 }
 
-void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
+void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each,
+                  std::vector<std::size_t>* gas_order) {
   ++rebuilds_;
   const std::size_t n = gas.size(), n_dm = dm.size();
   // The box.
@@ -205,6 +206,7 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
   });
   gas.permute(st.order, for_each);
   dm.permute(st.dm_order, for_each);
+  if (gas_order) *gas_order = std::move(st.order);
 
   // The leaves' h_max and cover radii; inner nodes take the largest cover below them.
   for (int c = static_cast<int>(cells_.size()) - 1; c >= 0; --c) {

@@ -33,7 +33,10 @@ class Space {
   // The first part of rebuild: cells, particle order, cover radii; positions are wrapped into
   // a periodic box. The neighbour lists are stale until find_neighbours, which reads only the
   // cells (so the caller may meanwhile work on the particles, as the engine's tree build does).
-  void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {});
+  // `gas_order`, if given, receives the permutation: gas particle i after the recut is the one
+  // that was at gas_order[i] before it.
+  void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {},
+             std::vector<std::size_t>* gas_order = nullptr);
   void find_neighbours(const ForEach& for_each = {});
 
   const std::vector<Cell>& cells() const { return cells_; }

@@ -1,0 +1,132 @@
+// Halo mode across MPI ranks: each rank keeps current only its own leaves and their neighbours (docs/design.md, "Halo mode").
+#include <fmt/format.h>
+
+#include <algorithm>
+
+#include "domain/RankExchange.hpp"
+#include "engine/CellMessages.hpp"
+#include "engine/Engine.hpp"
+#include "timestep/Integration.hpp"
+
+namespace fountain {
+
+bool Engine::holds(int r, int c) const {
+  const auto& h = holders_[static_cast<std::size_t>(c)];
+  return std::binary_search(h.begin(), h.end(), r);
+}
+
+void Engine::find_holders() {
+  // A leaf's tasks read its neighbours, and neighbourhood is symmetric (the larger cover of
+  // the two decides), so the ranks that read a leaf are the owners of its neighbours.
+  const std::size_t ncells = space_.cells().size();
+  holders_.assign(ncells, {});
+  held_.assign(ncells, 0);
+  for (int c : space_.leaves()) {
+    auto& h = holders_[static_cast<std::size_t>(c)];
+    h.push_back(owner_[static_cast<std::size_t>(c)]);
+    for (int n : space_.neighbours(c)) h.push_back(owner_[static_cast<std::size_t>(n)]);
+    std::sort(h.begin(), h.end());
+    h.erase(std::unique(h.begin(), h.end()), h.end());
+    held_[static_cast<std::size_t>(c)] = std::binary_search(h.begin(), h.end(), rank_);
+    leaves_held_ += held_[static_cast<std::size_t>(c)];
+  }
+  leaves_seen_ += static_cast<long long>(space_.leaves().size());
+}
+
+void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
+                                 const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders) {
+  // Every rank walks the same particles in the same order, so each knows what it sends and
+  // what it receives without being told.
+  const auto n = static_cast<std::size_t>(ranks_->size());
+  std::vector<std::vector<std::size_t>> send(n), recv(n);
+  for (int c : space_.leaves()) {
+    const Cell& cell = space_.cell(c);
+    const auto& now = holders_[static_cast<std::size_t>(c)];
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+      const auto was = static_cast<std::size_t>(old_leaf[order[i]]);
+      const auto& before = old_holders[was];
+      const int from = old_owner[was];
+      for (int q : now) {
+        if (std::binary_search(before.begin(), before.end(), q)) continue;
+        if (from == rank_) send[static_cast<std::size_t>(q)].push_back(i);
+        if (q == rank_) recv[static_cast<std::size_t>(from)].push_back(i);
+      }
+    }
+  }
+  to_rank_.resize(n);
+  for (std::size_t q = 0; q < n; ++q) {
+    to_rank_[q].clear();
+    MessageWriter w(to_rank_[q]);
+    if (!send[q].empty()) pack_gas_particles(w, gas_, send[q]);
+  }
+  const auto in = ranks_->alltoall(to_rank_);
+  for (std::size_t r = 0; r < n; ++r) {
+    if (static_cast<int>(r) == rank_ || recv[r].empty()) continue;
+    MessageReader reader(in[r]);
+    unpack_gas_particles(reader, gas_, recv[r]);
+    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more migrating particles than expected", r));
+  }
+}
+
+void Engine::exchange_halo() {
+  all_current_ = false;
+  const std::vector<int>& leaves = space_.leaves();
+  const std::size_t ncells = space_.cells().size();
+  wake_radiated_.assign(ncells, 0.0);
+  if (config_.hydro.timestep_limiter) {
+    // Any rank may ask to wake a particle of a leaf it reads. The requests are combined, the
+    // woken particles join those whose state is sent, and each owner wakes its leaves now,
+    // with the state as its tasks left it, as one rank does after the graph.
+    ranks_->min(gas_.wake_bin);
+    for (int c : leaves) {
+      if (!drifted_[static_cast<std::size_t>(c)]) continue;
+      const Cell& cell = space_.cell(c);
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+        if (gas_.wake_bin[i] != kNoBin) gas_moved_[i] = 1;
+    }
+    for (int c : leaves) {
+      if (!mine(c)) continue;
+      // One rank adds what the kicks radiated before waking, and what the wake gave back
+      // after it: kept apart so that the sums round alike.
+      Cell& cell = space_.cell(c);
+      const double kicks = cell.radiated;
+      cell.radiated = 0.0;
+      integration::wake(*ctx_, c);
+      wake_radiated_[static_cast<std::size_t>(c)] = cell.radiated;
+      cell.radiated = kicks;
+    }
+    std::fill(gas_.wake_bin.begin(), gas_.wake_bin.end(), kNoBin);
+  }
+  // Each drifted leaf's record goes to every rank (all take the same decisions from them);
+  // its changed particles only to the ranks that hold a copy.
+  const auto n = static_cast<std::size_t>(ranks_->size());
+  to_rank_.resize(n);
+  for (auto& b : to_rank_) b.clear();
+  for (int c : leaves) {
+    const auto uc = static_cast<std::size_t>(c);
+    if (!drifted_[uc] || !mine(c)) continue;
+    const CellUpdate update = CellUpdate::of(space_.cell(c));
+    for (std::size_t q = 0; q < n; ++q) {
+      if (static_cast<int>(q) == rank_) continue;
+      MessageWriter w(to_rank_[q]);
+      w.put(update);
+      w.put(wake_radiated_[uc]);
+      if (holds(static_cast<int>(q), c)) pack_moved_gas(w, space_, gas_, c, gas_moved_);
+    }
+  }
+  const auto in = ranks_->alltoall(to_rank_);
+  for (std::size_t r = 0; r < n; ++r) {
+    if (static_cast<int>(r) == rank_) continue;
+    MessageReader reader(in[r]);
+    for (int c : leaves) {
+      const auto uc = static_cast<std::size_t>(c);
+      if (!drifted_[uc] || owner_[uc] != static_cast<int>(r)) continue;
+      reader.get<CellUpdate>().apply_to(space_.cell(c));
+      wake_radiated_[uc] = reader.get<double>();
+      if (held_[uc]) unpack_moved_gas(reader, space_, gas_, c, gas_moved_);
+    }
+    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more cell state than expected", r));
+  }
+}
+
+}  // namespace fountain
