@@ -10,14 +10,15 @@ namespace fountain::bench {
 
 // What the engine had counted when the timed part of a run began.
 struct RankCounters {
-  double bytes = 0, messages = 0, graph_s = 0, exchange_s = 0, ghost_bytes = 0;
+  double bytes = 0, messages = 0, graph_s = 0, exchange_s = 0, ghost_bytes = 0, recut_bytes = 0;
   static RankCounters of(const Engine& e) {
     return {static_cast<double>(e.bytes_sent()), static_cast<double>(e.messages_sent()), e.graph_seconds(),
-            e.exchange_seconds(), static_cast<double>(e.ghost_bytes_sent())};
+            e.exchange_seconds(), static_cast<double>(e.ghost_bytes_sent()),
+            static_cast<double>(e.recut_bytes_sent())};
   }
 };
 
-// Rank 0's view (ranks are alike: each holds every particle and owns a share of the leaves).
+// Rank 0's view (ranks are alike: each owns a share of the leaves).
 // `busy_s` is the time inside tasks summed over threads; the waiting share is the thread
 // time not spent in tasks while the graph ran, plus the exchanges after it, over the wall.
 inline std::string rank_fields(const Engine& e, const RankCounters& before, long long steps, double wall_s,
@@ -29,10 +30,11 @@ inline std::string rank_fields(const Engine& e, const RankCounters& before, long
   const double waiting = thread_time > 0 ? ((graph * e.threads() - busy_s) + exchange * e.threads()) / thread_time : 0.0;
   return fmt::format(
       "\"ranks\": {}, \"ranks_x_threads\": \"{}x{}\", \"step_ms\": {:.4f}, \"bytes_sent_per_step_rank0\": {:.0f}, "
-      "\"ghost_bytes_sent_per_step_rank0\": {:.0f}, \"messages_sent_per_step_rank0\": {:.1f}, \"graph_s_rank0\": {:.3f}, \"exchange_s_rank0\": {:.3f}, "
+      "\"ghost_bytes_sent_per_step_rank0\": {:.0f}, \"recut_bytes_sent_per_step_rank0\": {:.0f}, \"messages_sent_per_step_rank0\": {:.1f}, \"graph_s_rank0\": {:.3f}, \"exchange_s_rank0\": {:.3f}, "
       "\"waiting_share_rank0\": {:.4f}, \"owner_cuts\": {}",
       e.ranks(), e.ranks(), e.threads(), 1e3 * wall_s * per_step, (now.bytes - before.bytes) * per_step,
-      (now.ghost_bytes - before.ghost_bytes) * per_step, (now.messages - before.messages) * per_step, graph, exchange, waiting, e.partitions());
+      (now.ghost_bytes - before.ghost_bytes) * per_step, (now.recut_bytes - before.recut_bytes) * per_step,
+      (now.messages - before.messages) * per_step, graph, exchange, waiting, e.partitions());
 }
 
 }  // namespace fountain::bench

@@ -16,7 +16,7 @@ def main(folder):
             r = json.load(f)
         runs.setdefault(r["problem"], {})[r["ranks_x_threads"]] = r
     lines = ["| problem | ranks x threads | wall (s) | steps | time per step (ms) | speed-up | efficiency | "
-             "sent per step, rank 0 (ghost messages) | messages per step | waiting share |",
+             "sent per step, rank 0 (ghost messages; recuts) | messages per step | waiting share |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for problem, by_layout in runs.items():
         base = by_layout.get("1x1")
@@ -27,7 +27,8 @@ def main(folder):
             lines.append(
                 f"| {problem} {r['particles']} | {layout} | {r['wall_s']:.1f} | {r['steps']} | {r['step_ms']:.1f} | "
                 f"{speed:.2f} | {speed / cores:.0%} | {r['bytes_sent_per_step_rank0'] / 1e6:.2f} MB "
-                f"({r.get('ghost_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB) | "
+                f"({r.get('ghost_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB; "
+                f"{r.get('recut_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB) | "
                 f"{r['messages_sent_per_step_rank0']:.0f} | {r['waiting_share_rank0']:.0%} |")
     print("\n".join(lines))
 

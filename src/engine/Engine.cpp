@@ -114,6 +114,7 @@ void Engine::rebuild() {
   std::vector<std::size_t> order;
   std::vector<int> old_leaf, old_owner;
   std::vector<std::vector<int>> old_holders;
+  const std::uint64_t bytes_before = ranks_ ? ranks_->traffic().bytes : 0;
   if (migrate) {
     share_recut_inputs();
     old_leaf.assign(gas_.size(), -1);
@@ -162,6 +163,7 @@ void Engine::rebuild() {
   if (halo_mode_) {
     find_holders();
     if (migrate) migrate_after_recut(order, old_leaf, old_owner, old_holders);
+    recut_bytes_ += ranks_->traffic().bytes - bytes_before;
   }
   rebuild_pending_ = false;
 }

@@ -149,6 +149,7 @@ class Engine {
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
   std::uint64_t ghost_bytes_sent() const;  // of bytes_sent(): the ghost results, cell to cell
+  std::uint64_t recut_bytes_sent() const { return recut_bytes_; }  // of bytes_sent(): halo mode's recuts
 
  private:
   enum class Phase { Density, Hydro, Full };
@@ -239,6 +240,7 @@ class Engine {
   std::vector<std::vector<int>> holders_;   // per leaf: the ranks keeping it current (sorted)
   std::vector<char> held_;                  // per cell: this rank keeps it current
   long long leaves_held_ = 0, leaves_seen_ = 0;  // summed over the recuts
+  std::uint64_t recut_bytes_ = 0;           // sent by the recuts: their inputs, the migrations
   std::vector<char> drifted_;               // per cell: drifted in this run of the graph
   std::vector<double> wake_radiated_;       // per cell: energy radiated by the wake's undoing of kicks
   std::vector<std::vector<char>> to_rank_;  // halo mode's messages, one per rank, reused

@@ -64,13 +64,17 @@ void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured)
   const std::size_t nl = leaves.size();
   constexpr int bits = 16;
   const double cells_per_side = static_cast<double>(1u << bits);
+  // The curve runs through a cube as wide as the box's longest side, not through the box
+  // stretched to a cube: in an elongated box (Sod's 4 x 1 x 1) a stretched curve may cut
+  // lengthwise, giving ranks four times the common surface.
+  const double side = std::max({space_.box_size().x, space_.box_size().y, space_.box_size().z});
   std::vector<std::uint64_t> key(nl);
   for (std::size_t l = 0; l < nl; ++l) {
     const Vec3 x = space_.cell(leaves[l]).centre();
     std::array<std::uint32_t, 3> q;
     for (int k = 0; k < 3; ++k)
       q[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(
-          std::clamp((x[k] - space_.box_lo()[k]) / space_.box_size()[k] * cells_per_side, 0.0, cells_per_side - 1.0));
+          std::clamp((x[k] - space_.box_lo()[k]) / side * cells_per_side, 0.0, cells_per_side - 1.0));
     key[l] = domain::hilbert_key(q[0], q[1], q[2], bits);
   }
   std::vector<int> curve(nl);
