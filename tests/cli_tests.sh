@@ -144,7 +144,7 @@ with h5py.File('zero.hdf5', 'w') as f:
     # self-gravity; a rotating sphere with gravity, cooling, MSPH, star formation with spawning
     # and MFB feedback with promotions. mpi_uneven_ranks: a 4 x 1 x 1 top-level grid on 3 ranks
     # (which do not divide it) and 5 (one owns no cell), with the owners chosen anew at every
-    # recut (a repartition in the middle of the run). The leak checker is off: Open MPI's
+    # recut (a repartition in the middle of the run), and cooling on. The leak checker is off: Open MPI's
     # own allocations outlive MPI_Finalize.
     mpirun_n() { ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$@"; }
     extra="" ranks="2 3 4"
@@ -157,7 +157,11 @@ with h5py.File('zero.hdf5', 'w') as f:
         T_END=0.02 ranks="3 5" extra="space:
   top_cells: 4
 domain:
-  repartition_imbalance: 0" ;;
+  repartition_imbalance: 0
+cooling:
+  enabled: true
+output:
+  statistics_every: 4" ;;
       mpi_gravity_ranks)
         "$bin" ic evrard -n 6 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Evrard ICs"
         T_END=0.05 extra="gravity:
@@ -195,6 +199,9 @@ $sphere_physics" ;;
       if [ "$case_name" = mpi_uneven_ranks ]; then
         chosen=$(sed -n "s/^ranks: $n, cell owners chosen \([0-9]*\) times.*/\1/p" "run$n.txt")
         [ "$chosen" -gt 1 ] || fail "owners were chosen only $chosen times: no repartition mid-run"
+        # With cooling, in halo mode: the radiated energy (which the owners' wakes add to) and
+        # every other total of the statistics file, line for line.
+        cmp out1/statistics.txt "out$n/statistics.txt" || fail "statistics differ from the 1-rank run's"
       fi
     done
     if [ "$case_name" = mpi_feedback_ranks ]; then
