@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <concepts>
 #include <cstdint>
 #include <cstring>
@@ -212,25 +213,182 @@ std::string checksum(const RestartState& s) {
 
 }  // namespace
 
+namespace {
+
+void write_scalars(hdf5::File& f, const RestartState& s, std::uint64_t n_gas, std::uint64_t n_dm) {
+  f.create_group("/Restart");
+  f.write_attribute("/Restart", "FormatVersion", kRestartFormatVersion);
+  f.write_attribute("/Restart", "TiCurrent", static_cast<std::int64_t>(s.ti_current));
+  f.write_attribute("/Restart", "Steps", static_cast<std::int64_t>(s.steps));
+  f.write_attribute("/Restart", "SnapshotsWritten", s.snapshots_written);
+  f.write_attribute("/Restart", "NextOutput", s.next_output);
+  f.write_attribute("/Restart", "RadiatedEnergy", s.radiated_energy);
+  f.write_attribute("/Restart", "NextParticleId", std::vector<std::uint64_t>{s.next_particle_id});
+  f.write_attribute("/Restart", "StarFormationTally", tally_values(s.star_formation));
+  f.write_attribute("/Restart", "GasParticles", static_cast<std::int64_t>(n_gas));
+  f.write_attribute("/Restart", "CollisionlessParticles", static_cast<std::int64_t>(n_dm));
+  f.write_string_dataset("/Restart/Parameters", s.parameters_yaml.empty() ? std::string("{}") : s.parameters_yaml);
+}
+
+std::string piece_checksum(const RestartPiece& p) {
+  Checksum c;
+  c.add(p.gas_index);
+  c.add(p.dm_index);
+  add_to_checksum(c, p.gas);
+  add_to_checksum(c, p.dm);
+  return c.hex();
+}
+
+// Puts each particle of `part` at its index in `whole`, field by field; `filled` counts.
+template <class Particles>
+void place(Particles& whole, Particles& part, const std::vector<std::uint64_t>& index, std::vector<char>& filled,
+           const std::string& piece, const char* noun) {
+  for (std::size_t k = 0; k < index.size(); ++k) {
+    if (index[k] >= filled.size())
+      throw InputError(fmt::format("{}: {} particle index {} is beyond the run's {} particles", piece, noun, index[k],
+                                   filled.size()));
+    if (filled[index[k]]) throw InputError(fmt::format("{}: {} particle {} is also in another piece", piece, noun, index[k]));
+    filled[index[k]] = 1;
+  }
+  std::vector<const void*> from;
+  for_each_field(part, [&](const char*, auto& field) { from.push_back(&field); });
+  std::size_t f = 0;
+  for_each_field(whole, [&](const char*, auto& field) {
+    using V = std::decay_t<decltype(field)>;
+    const V& src = *static_cast<const V*>(from[f++]);
+    for (std::size_t k = 0; k < index.size(); ++k) field[index[k]] = src[k];
+  });
+}
+
+}  // namespace
+
 void write_restart(const std::string& path, const RestartState& s) {
   hdf5::write_file_atomically(path, "restart file", [&](hdf5::File& f) {
-    f.create_group("/Restart");
-    f.write_attribute("/Restart", "FormatVersion", kRestartFormatVersion);
-    f.write_attribute("/Restart", "TiCurrent", static_cast<std::int64_t>(s.ti_current));
-    f.write_attribute("/Restart", "Steps", static_cast<std::int64_t>(s.steps));
-    f.write_attribute("/Restart", "SnapshotsWritten", s.snapshots_written);
-    f.write_attribute("/Restart", "NextOutput", s.next_output);
-    f.write_attribute("/Restart", "RadiatedEnergy", s.radiated_energy);
-    f.write_attribute("/Restart", "NextParticleId", std::vector<std::uint64_t>{s.next_particle_id});
-    f.write_attribute("/Restart", "StarFormationTally", tally_values(s.star_formation));
-    f.write_attribute("/Restart", "GasParticles", static_cast<std::int64_t>(s.gas.size()));
-    f.write_attribute("/Restart", "CollisionlessParticles", static_cast<std::int64_t>(s.dm.size()));
-    f.write_string_dataset("/Restart/Parameters", s.parameters_yaml.empty() ? std::string("{}") : s.parameters_yaml);
+    write_scalars(f, s, s.gas.size(), s.dm.size());
     f.write_attribute("/Restart", "Checksum", checksum(s));
     write_particles(f, kGasGroup, s.gas);
     write_particles(f, kDarkMatterGroup, s.dm);
   });
 }
+
+std::string restart_piece_name(const std::string& path, long long serial, int rank) {
+  const std::string stem = std::filesystem::path(path).stem().string();
+  return fmt::format("{}_{:06d}_rank{}.hdf5", stem, serial, rank);
+}
+
+void write_restart_piece(const std::string& piece_path, const RestartPiece& p) {
+  hdf5::write_file_atomically(piece_path, "restart piece", [&](hdf5::File& f) {
+    f.create_group("/Piece");
+    f.write_attribute("/Piece", "FormatVersion", kRestartFormatVersion);
+    f.write_attribute("/Piece", "GasParticles", static_cast<std::int64_t>(p.gas.size()));
+    f.write_attribute("/Piece", "CollisionlessParticles", static_cast<std::int64_t>(p.dm.size()));
+    f.write_attribute("/Piece", "Checksum", piece_checksum(p));
+    f.write_dataset("/Piece/GasIndex", p.gas_index);
+    f.write_dataset("/Piece/CollisionlessIndex", p.dm_index);
+    write_particles(f, kGasGroup, p.gas);
+    write_particles(f, kDarkMatterGroup, p.dm);
+  });
+}
+
+void write_restart_master(const std::string& path, const RestartState& s, long long serial, int pieces,
+                          std::uint64_t gas_total, std::uint64_t dm_total) {
+  hdf5::write_file_atomically(path, "restart file", [&](hdf5::File& f) {
+    write_scalars(f, s, gas_total, dm_total);
+    f.write_attribute("/Restart", "Serial", static_cast<std::int64_t>(serial));
+    std::string names;
+    for (int r = 0; r < pieces; ++r) names += restart_piece_name(path, serial, r) + "\n";
+    f.write_string_dataset("/Restart/Pieces", names);
+    Checksum c;
+    const std::string scalars = scalars_checksum_text(s) + fmt::format(" {} {} {} {}", gas_total, dm_total, serial, names);
+    c.add(scalars.data(), scalars.size());
+    c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
+    f.write_attribute("/Restart", "Checksum", c.hex());
+  });
+}
+
+namespace {
+std::vector<std::string> master_pieces(const std::string& path) {
+  std::vector<std::string> names;
+  if (!std::filesystem::exists(path) || !hdf5::is_hdf5(path)) return names;
+  hdf5::File f(path, hdf5::File::Mode::read);
+  if (!f.exists("/Restart/Pieces")) return names;
+  const std::string text = f.read_string("/Restart/Pieces");
+  std::size_t at = 0;
+  while (at < text.size()) {
+    const std::size_t end = text.find('\n', at);
+    names.push_back(text.substr(at, end - at));
+    if (end == std::string::npos) break;
+    at = end + 1;
+  }
+  return names;
+}
+}  // namespace
+
+void remove_stale_restart_pieces(const std::string& path) {
+  const std::vector<std::string> keep = master_pieces(path);
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  const std::string prefix = std::filesystem::path(path).stem().string() + "_";
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.empty() ? "." : dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(prefix, 0) != 0 || name.find("_rank") == std::string::npos || entry.path().extension() != ".hdf5")
+      continue;
+    if (std::find(keep.begin(), keep.end(), name) == keep.end()) std::filesystem::remove(entry.path(), ec);
+  }
+}
+
+namespace {
+RestartState read_restart_set(const hdf5::File& f, const std::string& path, RestartState s, std::uint64_t n_gas,
+                              std::uint64_t n_dm) {
+  if (!f.has_attribute("/Restart", "Serial"))
+    throw InputError(fmt::format("{}: /Restart has no attribute Serial (restart file incomplete)", path));
+  s.serial = f.read_attribute_int64("/Restart", "Serial").at(0);
+  const std::string names = f.read_string("/Restart/Pieces");
+  {
+    Checksum c;
+    const std::string scalars = scalars_checksum_text(s) + fmt::format(" {} {} {} {}", n_gas, n_dm, s.serial, names);
+    c.add(scalars.data(), scalars.size());
+    c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
+    const std::string stored = f.read_attribute_string("/Restart", "Checksum");
+    if (stored != c.hex())
+      throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
+  }
+  s.gas.resize(n_gas);
+  s.dm.resize(n_dm);
+  std::vector<char> gas_filled(n_gas, 0), dm_filled(n_dm, 0);
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  for (const std::string& name : master_pieces(path)) {
+    const std::string piece = (dir / name).string();
+    if (!std::filesystem::exists(piece))
+      throw InputError(fmt::format("{}: restart piece {} named by {} is missing", piece, name, path));
+    if (!hdf5::is_hdf5(piece)) throw InputError(fmt::format("{}: not a restart piece (not HDF5, or truncated)", piece));
+    hdf5::File pf(piece, hdf5::File::Mode::read);
+    for (const char* a : {"FormatVersion", "GasParticles", "CollisionlessParticles", "Checksum"})
+      if (!pf.exists("/Piece") || !pf.has_attribute("/Piece", a))
+        throw InputError(fmt::format("{}: /Piece has no attribute {} (restart piece incomplete)", piece, a));
+    RestartPiece p;
+    const std::uint64_t pg = pf.read_attribute_uint64("/Piece", "GasParticles").at(0);
+    const std::uint64_t pd = pf.read_attribute_uint64("/Piece", "CollisionlessParticles").at(0);
+    p.gas = read_particles<GasParticles>(pf, piece, kGasGroup, pg, "gas");
+    p.dm = read_particles<CollisionlessParticles>(pf, piece, kDarkMatterGroup, pd, "collisionless");
+    p.gas_index = pf.read_uint64("/Piece/GasIndex");
+    p.dm_index = pf.read_uint64("/Piece/CollisionlessIndex");
+    if (p.gas_index.size() != pg || p.dm_index.size() != pd)
+      throw InputError(fmt::format("{}: its particle indices disagree with its particle counts", piece));
+    const std::string stored = pf.read_attribute_string("/Piece", "Checksum");
+    if (stored != piece_checksum(p))
+      throw InputError(fmt::format("{}: restart piece is corrupted (checksum {} does not match its contents)", piece, stored));
+    place(s.gas, p.gas, p.gas_index, gas_filled, piece, "gas");
+    place(s.dm, p.dm, p.dm_index, dm_filled, piece, "collisionless");
+  }
+  const auto missing = [](const std::vector<char>& v) { return std::count(v.begin(), v.end(), 0); };
+  if (missing(gas_filled) > 0 || missing(dm_filled) > 0)
+    throw InputError(fmt::format("{}: its pieces hold {} of {} gas and {} of {} collisionless particles", path,
+                                 n_gas - static_cast<std::uint64_t>(missing(gas_filled)), n_gas,
+                                 n_dm - static_cast<std::uint64_t>(missing(dm_filled)), n_dm));
+  return s;
+}
+}  // namespace
 
 RestartState read_restart(const std::string& path) {
   if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: no such restart file", path));
@@ -258,6 +416,7 @@ RestartState read_restart(const std::string& path) {
   if (s.parameters_yaml == "{}") s.parameters_yaml.clear();
   const std::uint64_t n_gas = f.read_attribute_uint64("/Restart", "GasParticles").at(0);
   const std::uint64_t n_dm = f.read_attribute_uint64("/Restart", "CollisionlessParticles").at(0);
+  if (f.exists("/Restart/Pieces")) return read_restart_set(f, path, std::move(s), n_gas, n_dm);
   s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
   s.dm = read_particles<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, "collisionless");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");

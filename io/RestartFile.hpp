@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
@@ -24,6 +25,7 @@ struct RestartState {
   std::uint64_t next_particle_id = 0;  // the id the next spawned star takes (0: none spawned yet)
   starformation::StarFormationTally star_formation;  // since the start
   std::string parameters_yaml;  // the parameters the run was started with
+  long long serial = 0;  // of the last piece set written (0: none), for the next set's names
 };
 
 // Writes atomically (temporary file, then rename). Every field of the gas (/Gas) and of the
@@ -31,9 +33,29 @@ struct RestartState {
 // checksum over all of it.
 void write_restart(const std::string& path, const RestartState& state);
 
-// Reads and verifies a restart file: a missing file, another format version, a field whose
-// length disagrees with the stored particle count or a checksum that does not match (a
-// corrupted file) throws InputError naming the file.
+// Across MPI ranks a restart is a set: each rank writes a piece with the particles of the
+// cells it owns, each with its index in the run's particle order, then rank 0 writes the file
+// at `path` itself (the master), holding everything else and naming the pieces by file name
+// (they sit beside it, so a run folder can be moved). Pieces carry the write's serial number
+// in their names, so a set being written never overwrites the one the master names: a run
+// killed half-way through writing keeps the previous set whole.
+struct RestartPiece {
+  GasParticles gas;
+  CollisionlessParticles dm;
+  std::vector<std::uint64_t> gas_index, dm_index;  // each particle's place in the whole run
+};
+std::string restart_piece_name(const std::string& path, long long serial, int rank);
+void write_restart_piece(const std::string& piece_path, const RestartPiece& piece);
+// `scalars` is the state without particles; the totals are the whole run's particle counts.
+void write_restart_master(const std::string& path, const RestartState& scalars, long long serial, int pieces,
+                          std::uint64_t gas_total, std::uint64_t dm_total);
+// Removes the pieces beside `path` that its current master (if any) does not name.
+void remove_stale_restart_pieces(const std::string& path);
+
+// Reads and verifies a restart file, or a master and its pieces (put back in the run's
+// order): a missing file or piece, another format version, a field whose length disagrees
+// with the stored particle count, a checksum that does not match (a corrupted file), or
+// pieces that do not fill the run's particles exactly once, throws InputError naming the file.
 RestartState read_restart(const std::string& path);
 
 }  // namespace fountain::io

@@ -211,8 +211,8 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     sys.exit(0 if 'PartType4' in f and f['PartType4/Coordinates'].shape[0] > 0 else 1)" || fail "no star particle was spawned"
     fi ;;
   mpi_restart_after_kill)
-    # A 2-rank run stopped half-way after a restart file, as a kill would stop it, and
-    # restarted on 2 ranks, ends as the uninterrupted 1-rank run does, bit for bit.
+    # A 2-rank run stopped half-way after a restart set, as a kill would stop it, and
+    # restarted on 1, 2 and 3 ranks, ends as the uninterrupted 1-rank run does, bit for bit.
     extra="restart:
   every_steps: 4"
     "$bin" ic sod -n 24 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Sod ICs"
@@ -221,10 +221,26 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     "$bin" run params_mpi_whole.yml > runA.txt 2>&1 || { cat runA.txt; fail "uninterrupted run"; }
     stop_half_way "$(grep -c '^step' runA.txt)" \
       env ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml
+    # The restart is a set: a piece per rank, named by the master (restart.hdf5), and no other.
+    pieces=$(ls outB | grep -c '^restart_[0-9]*_rank[0-9]*\.hdf5$' || true)
+    [ "$pieces" -eq 2 ] || { ls outB; fail "expected 2 restart pieces beside the master, found $pieces"; }
+    # The same set continues on 1 and on 3 ranks too (copies of the run folder).
+    for n in 1 3; do
+      cp -r outB "outB$n"
+      sed "s|directory: outB|directory: outB$n|" params_mpi_killed.yml > "params_mpi_$n.yml"
+      ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$n" "$bin" run "params_mpi_$n.yml" --restart \
+        > "restart$n.txt" 2>&1 || { cat "restart$n.txt"; fail "restart of the 2-rank set on $n ranks failed"; }
+      "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 "outB$n/snapshot_0001.hdf5"
+    done
     ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_killed.yml --restart \
       > restart.txt 2>&1 || { cat restart.txt; fail "restart on 2 ranks failed"; }
     head -1 restart.txt
-    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
+    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
+    # A later set replaced the first: still two pieces, and those the master names.
+    pieces=$(ls outB | grep -c '^restart_[0-9]*_rank[0-9]*\.hdf5$' || true)
+    [ "$pieces" -eq 2 ] || { ls outB; fail "stale restart pieces left: $pieces" ; }
+    # On 1 rank the run writes one whole file again, and the 3-rank copy's set was replaced.
+    [ "$(ls outB1 | grep -c '_rank' || true)" -eq 0 ] || { ls outB1; fail "pieces left beside a 1-rank restart file"; } ;;
   snapshot_opens_in_yt)
     params good.hdf5 out
     "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }

@@ -813,3 +813,80 @@ TEST(IoExternal, WriteSnapshotForExternalCheck) {
   }
   EXPECT_TRUE(fs::exists(out));
 }
+
+namespace {
+// Restart state `s` split into two pieces (odd and even indices), written as a set beside `path`.
+void write_as_set(const fountain::io::RestartState& s, const std::string& path, long long serial) {
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  for (int r = 0; r < 2; ++r) {
+    fountain::io::RestartPiece p;
+    std::vector<std::size_t> gi, di;
+    for (std::size_t i = static_cast<std::size_t>(r); i < s.gas.size(); i += 2) gi.push_back(i);
+    for (std::size_t i = static_cast<std::size_t>(r); i < s.dm.size(); i += 2) di.push_back(i);
+    p.gas = s.gas;
+    p.gas.permute(gi);
+    p.dm = s.dm;
+    p.dm.permute(di);
+    p.gas_index.assign(gi.begin(), gi.end());
+    p.dm_index.assign(di.begin(), di.end());
+    fountain::io::write_restart_piece((dir / fountain::io::restart_piece_name(path, serial, r)).string(), p);
+  }
+  fountain::io::RestartState scalars = s;
+  scalars.gas = {};
+  scalars.dm = {};
+  fountain::io::write_restart_master(path, scalars, serial, 2, s.gas.size(), s.dm.size());
+}
+}  // namespace
+
+TEST_F(IoTest, RestartSetOfPiecesReadsBackAsTheWholeStateBitwise) {
+  const auto s = restart_state(17, 29);
+  const std::string path = file("restart.hdf5");
+  write_as_set(s, path, 3);
+  const auto r = fountain::io::read_restart(path);
+  EXPECT_EQ(r.serial, 3);
+  EXPECT_EQ(r.steps, s.steps);
+  EXPECT_EQ(r.parameters_yaml, s.parameters_yaml);
+  ASSERT_EQ(r.gas.size(), s.gas.size());
+  EXPECT_TRUE(same_bits(r.gas.id, s.gas.id));
+  EXPECT_TRUE(same_bits(r.gas.x, s.gas.x));
+  EXPECT_TRUE(same_bits(r.gas.u_full, s.gas.u_full));
+  EXPECT_TRUE(same_bits(r.gas.time_bin, s.gas.time_bin));
+  EXPECT_TRUE(same_bits(r.dm.id, s.dm.id));
+  EXPECT_TRUE(same_bits(r.dm.v_full, s.dm.v_full));
+  // A newer set replaces it, and the older pieces are then stale and removed.
+  write_as_set(s, path, 4);
+  fountain::io::remove_stale_restart_pieces(path);
+  EXPECT_FALSE(std::filesystem::exists(file(fountain::io::restart_piece_name(path, 3, 0))));
+  EXPECT_TRUE(std::filesystem::exists(file(fountain::io::restart_piece_name(path, 4, 1))));
+  EXPECT_EQ(fountain::io::read_restart(path).serial, 4);
+}
+
+TEST_F(IoTest, RestartSetWithAMissingOrCorruptedPieceIsRefusedByName) {
+  const auto s = restart_state(17, 29);
+  const std::string path = file("restart.hdf5");
+  write_as_set(s, path, 1);
+  const std::string piece = file(fountain::io::restart_piece_name(path, 1, 1));
+  {
+    hid_t f = H5Fopen(piece.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    hid_t ds = H5Dopen2(f, "/Gas/u_full", H5P_DEFAULT);
+    ASSERT_GE(ds, 0);
+    std::vector<double> u(8, 3.25);  // the odd half: 8 of 17
+    EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, u.data()), 0);
+    H5Dclose(ds);
+    H5Fclose(f);
+  }
+  try {
+    (void)fountain::io::read_restart(path);
+    ADD_FAILURE() << "a corrupted piece was read";
+  } catch (const fountain::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("rank1.hdf5: restart piece is corrupted"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(piece);
+  try {
+    (void)fountain::io::read_restart(path);
+    ADD_FAILURE() << "a set with a missing piece was read";
+  } catch (const fountain::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is missing"), std::string::npos) << e.what();
+  }
+}

@@ -203,11 +203,14 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   bool restart_wanted = false;  // due, waiting for a recut (below)
   // Writes the state as it stands: right after a recut of the cells (restore() recuts the
   // same particles into the same cells).
+  long long restart_serial = restart ? state.serial : 0;
   auto save_restart = [&] {
-    engine.gather_state();  // every rank calls it here; rank 0 then holds the whole state
     io::RestartState out;
-    out.gas = engine.gas();
-    out.dm = engine.dark_matter();
+    const std::string path = restart_path(params);
+    if (engine.ranks() == 1) {
+      out.gas = engine.gas();
+      out.dm = engine.dark_matter();
+    }
     out.ti_current = engine.ti_current();
     out.steps = engine.steps();
     out.snapshots_written = summary.snapshots;
@@ -216,7 +219,30 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     out.next_particle_id = engine.next_particle_id();
     out.star_formation = engine.star_formation_total();
     out.parameters_yaml = config.parameters_yaml;
-    if (io_rank) io::write_restart(restart_path(params), out);
+    if (engine.ranks() == 1) {
+      io::write_restart(path, out);
+      io::remove_stale_restart_pieces(path);  // of a set an earlier run on several ranks wrote
+    } else {
+      // Each rank writes the particles of its own cells (current on it in halo mode too),
+      // then rank 0 the master naming the pieces; the previous set stays whole until then.
+      ++restart_serial;
+      const auto [gas_owned, dm_owned] = engine.owned_particles();
+      io::RestartPiece piece;
+      piece.gas = engine.gas();
+      piece.gas.permute(gas_owned);
+      piece.dm = engine.dark_matter();
+      piece.dm.permute(dm_owned);
+      piece.gas_index.assign(gas_owned.begin(), gas_owned.end());
+      piece.dm_index.assign(dm_owned.begin(), dm_owned.end());
+      const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+      io::write_restart_piece((dir / io::restart_piece_name(path, restart_serial, engine.rank())).string(), piece);
+      (void)engine.any_rank(false);  // every piece is in place before the master names it
+      if (io_rank) {
+        io::write_restart_master(path, out, restart_serial, engine.ranks(), engine.gas().size(),
+                                 engine.dark_matter().size());
+        io::remove_stale_restart_pieces(path);
+      }
+    }
     last_restart = std::chrono::steady_clock::now();
     restart_wanted = false;
     if (!quiet) fmt::print(stderr, "restart file {} at step {}\n", restart_path(params), engine.steps());

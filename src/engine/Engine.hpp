@@ -145,6 +145,9 @@ class Engine {
   // whole state between steps across ranks (restart files, statistics). Free when alone, and
   // when nothing changed since the last call.
   void gather_state();
+  // The gas and collisionless particles (indices) of the leaves this rank owns, in the
+  // run's order: what it writes of a restart set. Every particle when alone.
+  std::pair<std::vector<std::size_t>, std::vector<std::size_t>> owned_particles() const;
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;

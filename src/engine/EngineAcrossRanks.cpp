@@ -28,6 +28,24 @@ void Engine::poll_receives(std::span<const int> waiting, std::vector<int>& opene
   for (int k : arrived) opened.push_back(waiting[static_cast<std::size_t>(k)]);
 }
 
+std::pair<std::vector<std::size_t>, std::vector<std::size_t>> Engine::owned_particles() const {
+  std::pair<std::vector<std::size_t>, std::vector<std::size_t>> out;
+  if (space_.leaves().empty()) {  // before the first recut: rank 0 speaks for all
+    if (rank_ == 0) {
+      for (std::size_t i = 0; i < gas_.size(); ++i) out.first.push_back(i);
+      for (std::size_t i = 0; i < dm_.size(); ++i) out.second.push_back(i);
+    }
+    return out;
+  }
+  for (int c : space_.leaves()) {
+    if (!mine(c)) continue;
+    const Cell& cell = space_.cell(c);
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) out.first.push_back(i);
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) out.second.push_back(i);
+  }
+  return out;
+}
+
 int Engine::rank() const { return rank_; }
 int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
 bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }
