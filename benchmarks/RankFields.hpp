@@ -31,10 +31,11 @@ inline std::string rank_fields(const Engine& e, const RankCounters& before, long
   return fmt::format(
       "\"ranks\": {}, \"ranks_x_threads\": \"{}x{}\", \"step_ms\": {:.4f}, \"bytes_sent_per_step_rank0\": {:.0f}, "
       "\"ghost_bytes_sent_per_step_rank0\": {:.0f}, \"recut_bytes_sent_per_step_rank0\": {:.0f}, \"messages_sent_per_step_rank0\": {:.1f}, \"graph_s_rank0\": {:.3f}, \"exchange_s_rank0\": {:.3f}, "
-      "\"waiting_share_rank0\": {:.4f}, \"owner_cuts\": {}",
+      "\"waiting_share_rank0\": {:.4f}, \"owner_cuts\": {}, \"halo_mode\": {}, \"held_share_rank0\": {:.4f}",
       e.ranks(), e.ranks(), e.threads(), 1e3 * wall_s * per_step, (now.bytes - before.bytes) * per_step,
       (now.ghost_bytes - before.ghost_bytes) * per_step, (now.recut_bytes - before.recut_bytes) * per_step,
-      (now.messages - before.messages) * per_step, graph, exchange, waiting, e.partitions());
+      (now.messages - before.messages) * per_step, graph, exchange, waiting, e.partitions(),
+      e.halo_mode() ? "true" : "false", e.held_share());
 }
 
 }  // namespace fountain::bench
