@@ -119,8 +119,9 @@ class Engine {
   void set_next_particle_id(std::uint64_t id) { next_id_ = id; }
   void set_record_timeline(bool on) { record_timeline_ = on; }
 
-  // Across MPI ranks (docs/design.md, "MPI"): every rank holds every particle, each runs the
-  // tasks of the cells it owns, and the ranks exchange what those tasks change.
+  // Across MPI ranks (docs/design.md, "MPI"): every rank stores every particle (current
+  // everywhere, or in halo mode only near its own cells), each runs the tasks of the cells it
+  // owns, and the ranks exchange what those tasks change.
   int rank() const;
   int ranks() const;
   // Whether any rank says yes (the one rank's answer when alone): for decisions that every
