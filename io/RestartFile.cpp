@@ -230,6 +230,16 @@ void write_scalars(hdf5::File& f, const RestartState& s, std::uint64_t n_gas, st
   f.write_string_dataset("/Restart/Parameters", s.parameters_yaml.empty() ? std::string("{}") : s.parameters_yaml);
 }
 
+// A master's: its scalars, totals, serial, piece names and parameters.
+std::string master_checksum(const RestartState& s, std::uint64_t n_gas, std::uint64_t n_dm, long long serial,
+                            const std::string& names) {
+  Checksum c;
+  const std::string scalars = scalars_checksum_text(s) + fmt::format(" {} {} {} {}", n_gas, n_dm, serial, names);
+  c.add(scalars.data(), scalars.size());
+  c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
+  return c.hex();
+}
+
 std::string piece_checksum(const RestartPiece& p) {
   Checksum c;
   c.add(p.gas_index);
@@ -298,11 +308,7 @@ void write_restart_master(const std::string& path, const RestartState& s, long l
     std::string names;
     for (int r = 0; r < pieces; ++r) names += restart_piece_name(path, serial, r) + "\n";
     f.write_string_dataset("/Restart/Pieces", names);
-    Checksum c;
-    const std::string scalars = scalars_checksum_text(s) + fmt::format(" {} {} {} {}", gas_total, dm_total, serial, names);
-    c.add(scalars.data(), scalars.size());
-    c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
-    f.write_attribute("/Restart", "Checksum", c.hex());
+    f.write_attribute("/Restart", "Checksum", master_checksum(s, gas_total, dm_total, serial, names));
   });
 }
 
@@ -344,15 +350,9 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
     throw InputError(fmt::format("{}: /Restart has no attribute Serial (restart file incomplete)", path));
   s.serial = f.read_attribute_int64("/Restart", "Serial").at(0);
   const std::string names = f.read_string("/Restart/Pieces");
-  {
-    Checksum c;
-    const std::string scalars = scalars_checksum_text(s) + fmt::format(" {} {} {} {}", n_gas, n_dm, s.serial, names);
-    c.add(scalars.data(), scalars.size());
-    c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
-    const std::string stored = f.read_attribute_string("/Restart", "Checksum");
-    if (stored != c.hex())
-      throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
-  }
+  const std::string stored = f.read_attribute_string("/Restart", "Checksum");
+  if (stored != master_checksum(s, n_gas, n_dm, s.serial, names))
+    throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
   s.gas.resize(n_gas);
   s.dm.resize(n_dm);
   std::vector<char> gas_filled(n_gas, 0), dm_filled(n_dm, 0);
