@@ -20,6 +20,8 @@
 
 namespace fountain {
 
+class MessageWriter;
+class MessageReader;
 namespace starformation {
 struct StarFormationState;
 }
@@ -190,6 +192,10 @@ class Engine {
                            const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders);
   void exchange_halo();
   bool holds(int r, int c) const;
+  // One all-to-all: `pack(q, w)` writes what goes to rank q, `unpack(r, reader)` reads what
+  // rank r sent, which it must take whole (`what` names it if not).
+  void exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
+                           const std::function<void(int, MessageReader&)>& unpack, const char* what);
 
   RunConfig config_;
   GasParticles gas_;

@@ -218,30 +218,6 @@ void Engine::sync_feedback_sites() {
       "feedback sites");
 }
 
-void Engine::share_recut_inputs() {
-  // The recut reads positions, h and v_full of every particle, and the rebuild then the time
-  // bins: every rank must see the owners' values to cut the same cells. A rank that holds a
-  // leaf has them already, current; only the others are sent it.
-  const auto n = static_cast<std::size_t>(ranks_->size());
-  to_rank_.resize(n);
-  for (std::size_t q = 0; q < n; ++q) {
-    to_rank_[q].clear();
-    if (static_cast<int>(q) == rank_) continue;
-    MessageWriter w(to_rank_[q]);
-    for (int c : space_.leaves())
-      if (mine(c) && !holds(static_cast<int>(q), c)) pack_recut_inputs(w, space_, gas_, c);
-  }
-  const auto in = ranks_->alltoall(to_rank_);
-  for (std::size_t r = 0; r < n; ++r) {
-    if (static_cast<int>(r) == rank_) continue;
-    MessageReader reader(in[r]);
-    for (int c : space_.leaves())
-      if (owner_[static_cast<std::size_t>(c)] == static_cast<int>(r) && !held_[static_cast<std::size_t>(c)])
-        unpack_recut_inputs(reader, space_, gas_, c);
-    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more recut inputs than expected", r));
-  }
-}
-
 void Engine::gather_state() {
   if (!halo_mode_ || all_current_ || space_.leaves().empty()) return;
   exchange_active_leaves(

@@ -33,6 +33,42 @@ void Engine::find_holders() {
   leaves_seen_ += static_cast<long long>(space_.leaves().size());
 }
 
+void Engine::exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
+                                 const std::function<void(int, MessageReader&)>& unpack, const char* what) {
+  const int n = ranks_->size();
+  to_rank_.resize(static_cast<std::size_t>(n));
+  for (int q = 0; q < n; ++q) {
+    auto& b = to_rank_[static_cast<std::size_t>(q)];
+    b.clear();
+    MessageWriter w(b);
+    if (q != rank_) pack(q, w);
+  }
+  const auto in = ranks_->alltoall(to_rank_);
+  for (int r = 0; r < n; ++r) {
+    if (r == rank_) continue;
+    MessageReader reader(in[static_cast<std::size_t>(r)]);
+    unpack(r, reader);
+    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more {} than expected", r, what));
+  }
+}
+
+void Engine::share_recut_inputs() {
+  // The recut reads positions, h and v_full of every particle, and the rebuild then the time
+  // bins: every rank must see the owners' values to cut the same cells. A rank that holds a
+  // leaf has them already, current; only the others are sent it.
+  exchange_with_ranks(
+      [&](int q, MessageWriter& w) {
+        for (int c : space_.leaves())
+          if (mine(c) && !holds(q, c)) pack_recut_inputs(w, space_, gas_, c);
+      },
+      [&](int r, MessageReader& reader) {
+        for (int c : space_.leaves())
+          if (owner_[static_cast<std::size_t>(c)] == r && !held_[static_cast<std::size_t>(c)])
+            unpack_recut_inputs(reader, space_, gas_, c);
+      },
+      "recut inputs");
+}
+
 void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
                                  const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders) {
   // Every rank walks the same particles in the same order, so each knows what it sends and
@@ -53,19 +89,10 @@ void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const st
       }
     }
   }
-  to_rank_.resize(n);
-  for (std::size_t q = 0; q < n; ++q) {
-    to_rank_[q].clear();
-    MessageWriter w(to_rank_[q]);
-    if (!send[q].empty()) pack_gas_particles(w, gas_, send[q]);
-  }
-  const auto in = ranks_->alltoall(to_rank_);
-  for (std::size_t r = 0; r < n; ++r) {
-    if (static_cast<int>(r) == rank_ || recv[r].empty()) continue;
-    MessageReader reader(in[r]);
-    unpack_gas_particles(reader, gas_, recv[r]);
-    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more migrating particles than expected", r));
-  }
+  exchange_with_ranks(
+      [&](int q, MessageWriter& w) { pack_gas_particles(w, gas_, send[static_cast<std::size_t>(q)]); },
+      [&](int r, MessageReader& reader) { unpack_gas_particles(reader, gas_, recv[static_cast<std::size_t>(r)]); },
+      "migrating particles");
 }
 
 void Engine::exchange_halo() {
@@ -99,34 +126,26 @@ void Engine::exchange_halo() {
   }
   // Each drifted leaf's record goes to every rank (all take the same decisions from them);
   // its changed particles only to the ranks that hold a copy.
-  const auto n = static_cast<std::size_t>(ranks_->size());
-  to_rank_.resize(n);
-  for (auto& b : to_rank_) b.clear();
-  for (int c : leaves) {
-    const auto uc = static_cast<std::size_t>(c);
-    if (!drifted_[uc] || !mine(c)) continue;
-    const CellUpdate update = CellUpdate::of(space_.cell(c));
-    for (std::size_t q = 0; q < n; ++q) {
-      if (static_cast<int>(q) == rank_) continue;
-      MessageWriter w(to_rank_[q]);
-      w.put(update);
-      w.put(wake_radiated_[uc]);
-      if (holds(static_cast<int>(q), c)) pack_moved_gas(w, space_, gas_, c, gas_moved_);
-    }
-  }
-  const auto in = ranks_->alltoall(to_rank_);
-  for (std::size_t r = 0; r < n; ++r) {
-    if (static_cast<int>(r) == rank_) continue;
-    MessageReader reader(in[r]);
-    for (int c : leaves) {
-      const auto uc = static_cast<std::size_t>(c);
-      if (!drifted_[uc] || owner_[uc] != static_cast<int>(r)) continue;
-      reader.get<CellUpdate>().apply_to(space_.cell(c));
-      wake_radiated_[uc] = reader.get<double>();
-      if (held_[uc]) unpack_moved_gas(reader, space_, gas_, c, gas_moved_);
-    }
-    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more cell state than expected", r));
-  }
+  exchange_with_ranks(
+      [&](int q, MessageWriter& w) {
+        for (int c : leaves) {
+          const auto uc = static_cast<std::size_t>(c);
+          if (!drifted_[uc] || !mine(c)) continue;
+          w.put(CellUpdate::of(space_.cell(c)));
+          w.put(wake_radiated_[uc]);
+          if (holds(q, c)) pack_moved_gas(w, space_, gas_, c, gas_moved_);
+        }
+      },
+      [&](int r, MessageReader& reader) {
+        for (int c : leaves) {
+          const auto uc = static_cast<std::size_t>(c);
+          if (!drifted_[uc] || owner_[uc] != r) continue;
+          reader.get<CellUpdate>().apply_to(space_.cell(c));
+          wake_radiated_[uc] = reader.get<double>();
+          if (held_[uc]) unpack_moved_gas(reader, space_, gas_, c, gas_moved_);
+        }
+      },
+      "cell state");
 }
 
 }  // namespace fountain
