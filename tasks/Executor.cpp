@@ -93,19 +93,10 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         wait[static_cast<std::size_t>(t)].fetch_add(1, std::memory_order_relaxed);
         pending.push_back(t);
       }
-  if (!pending.empty() && !polling_arena_) {
-    polling_parallelism_ = std::make_unique<tbb::global_control>(
-        tbb::global_control::max_allowed_parallelism,
-        std::max<std::size_t>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
-                              static_cast<std::size_t>(threads_) + 1));
-    polling_arena_ = std::make_unique<tbb::task_arena>(threads_ + 1);
-  }
   const bool polling = !pending.empty();
-  tbb::task_arena& arena = polling ? *polling_arena_ : *arena_;
 
   std::atomic<std::int64_t> busy{0};
   std::atomic<int> done{0};
-  std::atomic<int> settled{0};  // bumped when every task is done or one failed: wakes a polling caller
   // Hand-offs between threads go through these atomics (and the wait counters), not only
   // through TBB's queues: so a task sees the set-up and its predecessors' writes, the caller
   // sees every task's writes, and ThreadSanitizer (TBB is not instrumented) sees it all too.
@@ -115,28 +106,83 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   std::atomic<bool> failed{false};
   std::exception_ptr error;
   const std::int64_t t0 = now_ns();
+  jobs_.store(0, std::memory_order_relaxed);
+  // Polling for gates is done by the threads that run tasks, not by a thread of its own: a
+  // busy thread polls between tasks at most every kPollEvery, and the thread whose job ends
+  // with no other job running keeps polling until a gate opens. A separate polling thread
+  // woke every 20 us - 1 ms beside the workers; across two ranks on two cores its ~3,400
+  // context switches per second per rank cost the workers ~20% more time in the SPH loops
+  // (Sedov 250k, 2 ranks x 1 thread, perf), more than a late message ever did.
+  constexpr std::int64_t kPollEvery = 50'000;  // ns
+  std::atomic<int> waiting_gates{static_cast<int>(pending.size())};
+  std::atomic<bool> poll_lock{false};     // one poll at a time: it owns `pending`
+  std::atomic<bool> poller{false};        // a thread is in the idle polling loop
+  std::atomic<std::int64_t> last_poll{now_ns()};
 
+  tbb::task_arena& arena = *arena_;
   arena.execute([&] {
     tbb::task_group group;
     // Runs task `first` and then, in this thread, whatever it readies, spawning the rest.
     std::function<void(int)> process;
-    auto spawn = [&](int t) { group.run(SpawnedJob{&process, &go, t}); };
+    auto spawn = [&](int t) {
+      jobs_.fetch_add(1, std::memory_order_acq_rel);
+      group.run(SpawnedJob{&process, &go, t});
+    };
     // Opens the gates whose condition holds (one poll for all of them: each MPI test call
     // drives the library's progress engine, so one call per waiting message would not do).
+    // Returns how many gates opened (none when another thread holds the poll).
     std::vector<int> opened_now;
-    auto open_gates = [&] {
+    auto open_gates = [&]() -> std::size_t {
+      if (poll_lock.exchange(true, std::memory_order_acquire)) return 0;
       opened_now.clear();
       try {
         gates->poll(pending, opened_now);
       } catch (...) {
         if (!failed.exchange(true)) error = std::current_exception();
-        return false;
       }
       for (int t : opened_now) {
         pending.erase(std::find(pending.begin(), pending.end(), t));
+        waiting_gates.fetch_sub(1, std::memory_order_acq_rel);
         if (wait[static_cast<std::size_t>(t)].fetch_sub(1, std::memory_order_acq_rel) == 1) spawn(t);
       }
-      return !opened_now.empty();
+      const std::size_t opened = opened_now.size();
+      last_poll.store(now_ns(), std::memory_order_relaxed);
+      poll_lock.store(false, std::memory_order_release);
+      return opened;
+    };
+    auto poll_if_due = [&] {
+      if (waiting_gates.load(std::memory_order_acquire) > 0 &&
+          now_ns() - last_poll.load(std::memory_order_relaxed) >= kPollEvery)
+        open_gates();
+    };
+    // Called by each job as it ends: while gates wait and fewer jobs are under way than there
+    // are threads (so that a thread would idle), this thread polls. It first yields between polls (a message is often close), then naps, doubling, up to
+    // 1 ms: across more ranks than cores, the rank with work gets the core. The outer loop
+    // closes the race with a job that ended while this thread was leaving the loop.
+    auto poll_while_idle = [&] {
+      auto idle = [&] {
+        return waiting_gates.load(std::memory_order_acquire) > 0 &&
+               jobs_.load(std::memory_order_acquire) < threads_ && !failed.load();
+      };
+      while (idle()) {
+        if (poller.exchange(true, std::memory_order_acq_rel)) return;  // another thread polls
+        int quiet = 0;
+        std::chrono::microseconds nap{50};
+        while (idle()) {
+          if (open_gates() > 0) {
+            quiet = 0;
+            nap = std::chrono::microseconds{50};
+            continue;
+          }
+          if (++quiet < 200) {
+            std::this_thread::yield();
+          } else {
+            std::this_thread::sleep_for(nap);
+            nap = std::min(2 * nap, std::chrono::microseconds{1000});
+          }
+        }
+        poller.store(false, std::memory_order_release);
+      }
     };
     process = [&](int first) {
       std::vector<int> ready{first};
@@ -145,6 +191,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
       while (!ready.empty()) {
         const int t = ready.back();
         ready.pop_back();
+        if (t < 0) continue;  // the job that starts the polling: no task
         // Pairs with the release of the last predecessor's decrement.
         (void)wait[static_cast<std::size_t>(t)].load(std::memory_order_acquire);
         const Task& task = graph.task(t);
@@ -177,17 +224,14 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
           }
         }
         if (keep >= 0) ready.push_back(keep);
+        if (polling) poll_if_due();
       }
       busy.fetch_add(my_busy, std::memory_order_relaxed);
-      // Adding to `done` is this job's last touch of the closure (the caller may destroy it
-      // once every job has added): what the wake-up needs is copied out first.
-      std::atomic<int>& wake = settled;
-      const int total = n_part;
-      const bool failure = failed.load();
-      if (done.fetch_add(my_done, std::memory_order_acq_rel) + my_done == total || failure) {
-        wake.fetch_add(1, std::memory_order_release);
-        wake.notify_all();
-      }
+      jobs_.fetch_sub(1, std::memory_order_acq_rel);
+      if (polling) poll_while_idle();
+      // Adding to `done` is this job's last touch of the closure: the caller destroys it
+      // after group.wait(), which ThreadSanitizer cannot see, and acquires `done` first.
+      done.fetch_add(my_done, std::memory_order_acq_rel);
     };
     // Roots are collected before any runs: once tasks run, counters of others reach zero.
     std::vector<int> roots;
@@ -201,29 +245,8 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     }
     go.store(true, std::memory_order_release);
     for (int t : roots) spawn(t);
-    // The caller polls, sleeping between polls so that it takes little from the workers'
-    // cores: waking often costs them more than a late message (measured on Sod across two
-    // ranks on two cores: 20 us sleeps throughout made the run 1.5x slower than 1 ms ones,
-    // and polls by the workers between tasks cost more than they saved). Messages come in
-    // bursts, so the sleep starts short after one arrives and doubles while none does. It
-    // then waits, without joining the work (so no more than `threads_` threads compute),
-    // for the last task to wake it.
-    std::chrono::microseconds nap{20};
-    while (!pending.empty() && !failed.load()) {
-      if (open_gates()) {
-        nap = std::chrono::microseconds{20};
-      } else {
-        std::this_thread::sleep_for(nap);
-        nap = std::min(2 * nap, std::chrono::microseconds{1000});
-      }
-    }
-    if (polling) {
-      int seen = settled.load(std::memory_order_acquire);
-      while (done.load(std::memory_order_acquire) < n_part && !failed.load()) {
-        settled.wait(seen, std::memory_order_acquire);
-        seen = settled.load(std::memory_order_acquire);
-      }
-    }
+    // With gates and nothing free to run, a job that runs no task starts the polling.
+    if (polling) spawn(-1);
     group.wait();
     (void)done.load(std::memory_order_acquire);  // every job's writes, before `process` goes
   });
@@ -267,7 +290,7 @@ void Executor::for_each_in_task(std::size_t n, const std::function<void(std::siz
   // wait runs only these jobs (a helper not yet started finds no piece left and returns).
   std::atomic<std::size_t> next{0}, done{0};
   std::atomic<bool> go{false};
-  std::function<void(int)> help = [&](int) {
+  std::function<void(int)> help = [&](int helper) {
     const bool helping = !InTask::here();
     const std::int64_t s = helping ? now_ticks() : 0;
     std::size_t mine = 0;
@@ -277,12 +300,17 @@ void Executor::for_each_in_task(std::size_t n, const std::function<void(std::siz
       ++mine;
     }
     if (helping) helped_ticks_.fetch_add(now_ticks() - s, std::memory_order_relaxed);
+    if (helper) jobs_.fetch_sub(1, std::memory_order_acq_rel);
     done.fetch_add(mine, std::memory_order_acq_rel);
   };
   tbb::this_task_arena::isolate([&] {
     tbb::task_group group;
     go.store(true, std::memory_order_release);
-    for (int h = 1; h < threads_ && static_cast<std::size_t>(h) < n; ++h) group.run(SpawnedJob{&help, &go, 0});
+    // The helpers count as jobs, so that an idle thread polling for gates makes way for them.
+    for (int h = 1; h < threads_ && static_cast<std::size_t>(h) < n; ++h) {
+      jobs_.fetch_add(1, std::memory_order_acq_rel);
+      group.run(SpawnedJob{&help, &go, 1});
+    }
     help(0);
     group.wait();
   });

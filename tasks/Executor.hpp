@@ -7,7 +7,6 @@
 #include <span>
 #include <vector>
 
-#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
 #include "TaskGraph.hpp"
@@ -36,9 +35,10 @@ class Executor {
 
   // Tasks that also wait for something outside the graph, such as a message from another
   // rank: each runs only once `poll` has named it (and its predecessors are done). `poll`
-  // is handed the tasks still waiting and appends those whose condition now holds; it is
-  // called by the calling thread, which runs no tasks meanwhile (the run then has a thread
-  // more, so as many compute), so no worker thread ever blocks on a message.
+  // is handed the tasks still waiting and appends those whose condition now holds. The
+  // threads that run tasks call it, one at a time (any of them, so it must not care which):
+  // between tasks at most every 50 us, and without pause while no task can run. No thread
+  // ever blocks on a message, and no thread beyond `threads` wakes to poll.
   struct Gates {
     std::vector<int> tasks;
     std::function<void(std::span<const int> waiting, std::vector<int>& opened)> poll;
@@ -75,13 +75,11 @@ class Executor {
  private:
   int threads_;
   std::unique_ptr<tbb::task_arena> arena_;
-  // For runs with gates: `threads_` workers beside the polling caller (made when first needed).
-  std::unique_ptr<tbb::global_control> polling_parallelism_;
-  std::unique_ptr<tbb::task_arena> polling_arena_;
   std::vector<char> listed_;  // scratch for `only`: which tasks are listed
   std::int64_t last_wall_ns_ = 0;
   std::int64_t last_busy_ns_ = 0;
   std::atomic<std::int64_t> helped_ticks_{0};  // for_each_in_task pieces run outside any task
+  std::atomic<int> jobs_{0};  // jobs of the current run (and their helpers) spawned, not yet finished
 };
 
 }  // namespace fountain::tasks

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 #include <span>
+#include <mutex>
 #include <thread>
 #include <stdexcept>
 #include <string>
@@ -579,7 +580,7 @@ TEST(Executor, OnlyListedTasksRunInDependencyOrder) {
 
 // Gates (messages from other ranks): a gated task runs once its gate is named by the poll
 // and its predecessors are done, never earlier, with no more than `threads` tasks running at
-// once (the polling caller does not compute). Half the gates are opened by tasks of the
+// once (the threads that poll are the ones that compute). Half the gates are opened by tasks of the
 // same graph (a rank's own sends, as when two ranks exchange), half from another thread.
 TEST(Executor, GatedTasksWaitForTheirGateAndNoThreadBlocks) {
   TaskTypeRegistry types;
@@ -636,5 +637,59 @@ TEST(Executor, GatedTasksWaitForTheirGateAndNoThreadBlocks) {
     for (int i = 0; i < g.size(); ++i) EXPECT_EQ(runs[static_cast<std::size_t>(i)].load(), 1) << "task " << i;
     for (int t : gated) EXPECT_EQ(gate_seen_open[static_cast<std::size_t>(t)].load(), 1) << "gated task " << t << " ran before its gate opened";
     EXPECT_LE(most.load(), threads) << "more tasks ran at once than threads";
+  }
+}
+
+// The polling done by idle threads: every task of the graph is gated (nothing can start
+// before a poll), gates open from another thread in the reverse of the dependency order (a
+// gate opened while its task still waits for a gated predecessor must not end the polling),
+// and the poll is never entered by two threads at once.
+TEST(Executor, AllTasksGatedAndChainedStillRunAndPollsNeverOverlap) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  for (int threads : {1, 2, 3}) {
+    TaskGraph g;
+    constexpr int chain = 12;
+    std::vector<int> tasks;
+    for (int k = 0; k < chain; ++k) {
+      tasks.push_back(g.add(ty, k));
+      if (k > 0) g.depends(tasks[static_cast<std::size_t>(k - 1)], tasks.back());
+    }
+    g.finalize();
+    std::vector<std::atomic<int>> open(chain);
+    for (auto& o : open) o.store(0);
+    std::atomic<int> in_poll{0}, overlaps{0}, polls{0};
+    Executor::Gates gates;
+    gates.tasks = tasks;
+    gates.poll = [&](std::span<const int> waiting, std::vector<int>& opened) {
+      if (in_poll.fetch_add(1) != 0) overlaps.fetch_add(1);
+      polls.fetch_add(1);
+      for (int t : waiting)
+        if (open[static_cast<std::size_t>(g.task(t).ci)].load()) opened.push_back(t);
+      in_poll.fetch_sub(1);
+    };
+    std::thread remote([&] {
+      for (int k = chain - 1; k >= 0; --k) {
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+        open[static_cast<std::size_t>(k)].store(1);
+      }
+    });
+    std::vector<int> order;
+    std::mutex order_mutex;
+    Executor exec(threads);
+    exec.run(
+        g,
+        [&](const Task& t) {
+          EXPECT_EQ(open[static_cast<std::size_t>(t.ci)].load(), 1) << "task " << t.ci << " ran before its gate opened";
+          const std::lock_guard lock(order_mutex);
+          order.push_back(t.ci);
+        },
+        nullptr, nullptr, &gates);
+    remote.join();
+    std::vector<int> expected(chain);
+    for (int k = 0; k < chain; ++k) expected[static_cast<std::size_t>(k)] = k;
+    EXPECT_EQ(order, expected) << threads << " threads";
+    EXPECT_EQ(overlaps.load(), 0) << "two threads polled at once";
+    EXPECT_GT(polls.load(), 0);
   }
 }
