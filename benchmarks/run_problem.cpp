@@ -33,6 +33,8 @@ int main(int argc, char** argv) {
   app.add_option("--viscosity-alpha", viscosity_alpha, "hydro.viscosity_alpha (the paper's 1.3 by default)");
   double neighbours_tolerance = HydroParams{}.neighbours_tolerance;
   app.add_option("--neighbours-tolerance", neighbours_tolerance, "hydro.neighbours_tolerance");
+  double repartition_imbalance = RunConfig{}.repartition_imbalance;
+  app.add_option("--repartition-imbalance", repartition_imbalance, "domain.repartition_imbalance (across ranks)");
   app.add_option("--json", json_path);
   CLI11_PARSE(app, argc, argv);
 
@@ -63,6 +65,7 @@ int main(int argc, char** argv) {
   c.space.periodic = true;
   c.space.box_size = ic.box_size;
   c.space.split_size = split;
+  c.repartition_imbalance = repartition_imbalance;
   const std::size_t n = ic.gas.size();
 
   const auto t0 = std::chrono::steady_clock::now();
