@@ -17,8 +17,12 @@ constexpr std::size_t kReorderPiece = 4096;
 // widest field: fields keep their own allocations, so a rebuild allocates one buffer instead
 // of a new vector per field (the churn of tens of MB per rebuild fragmented the heap and
 // raised the peak memory). Each field is gathered and copied back in pieces, in parallel.
+// Pieces the order leaves in place are skipped: between two rebuilds most particles stay in
+// their leaf and, where no leaf before them gained or lost any, at their index (Sedov 250k:
+// ~60% of the pieces, where a rank of an MPI run permutes every particle on one thread).
 struct Reorder {
   const std::vector<std::size_t>& order;
+  const std::vector<char>& piece_moves;
   std::vector<std::byte>& scratch;
   const ForEach& for_each;
   template <class T>
@@ -27,28 +31,41 @@ struct Reorder {
     const std::size_t n = order.size();
     if (scratch.size() < n * sizeof(T)) scratch.resize(n * sizeof(T));
     std::byte* out = scratch.data();
-    const std::size_t pieces = (n + kReorderPiece - 1) / kReorderPiece;
+    const std::size_t pieces = piece_moves.size();
     for_each_or_serial(for_each, pieces, [&](std::size_t p) {
+      if (!piece_moves[p]) return;
       const std::size_t end = std::min(n, (p + 1) * kReorderPiece);
       for (std::size_t k = p * kReorderPiece; k < end; ++k) std::memcpy(out + k * sizeof(T), &field[order[k]], sizeof(T));
     });
     field.resize(n);
     for_each_or_serial(for_each, pieces, [&](std::size_t p) {
+      if (!piece_moves[p]) return;
       const std::size_t begin = p * kReorderPiece, end = std::min(n, begin + kReorderPiece);
       std::memcpy(field.data() + begin, out + begin * sizeof(T), (end - begin) * sizeof(T));
     });
   }
 };
+
+// Which pieces of `order` move any particle.
+std::vector<char> pieces_moved(const std::vector<std::size_t>& order) {
+  const std::size_t n = order.size();
+  std::vector<char> moves((n + kReorderPiece - 1) / kReorderPiece, 0);
+  for (std::size_t k = 0; k < n; ++k)
+    if (order[k] != k) moves[k / kReorderPiece] = 1;
+  return moves;
+}
 }  // namespace
 
 void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each) {
   std::vector<std::byte> scratch;
-  for_each_field(Reorder{order, scratch, for_each});
+  const std::vector<char> moves = pieces_moved(order);
+  for_each_field(Reorder{order, moves, scratch, for_each});
 }
 
 void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each) {
   std::vector<std::byte> scratch;
-  for_each_field(Reorder{order, scratch, for_each});
+  const std::vector<char> moves = pieces_moved(order);
+  for_each_field(Reorder{order, moves, scratch, for_each});
 }
 
 }  // namespace fountain
