@@ -201,5 +201,41 @@ TEST_F(TwoRanks, ReaderRefusesAShortMessage) {
   EXPECT_THROW((void)r.get<double>(), std::logic_error);
 }
 
+
+// A permutation that leaves most of the store in place (as a rebuild's mostly does) moves
+// exactly the particles it names: pieces it does not touch are skipped, pieces it touches
+// are gathered whole, and a shorter order drops the tail.
+TEST(GasParticlesPermute, MovesWhatTheOrderMovesAndKeepsTheRest) {
+  constexpr std::size_t n = 20000;
+  auto store = [] {
+    GasParticles g;
+    g.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      g.id[i] = 1000 + i;
+      g.x[i] = {static_cast<double>(i), 0.5 * static_cast<double>(i), 1.0};
+      g.u[i] = 3.0 * static_cast<double>(i);
+      g.time_bin[i] = static_cast<TimeBin>(i % 50);
+    }
+    return g;
+  };
+  std::vector<std::size_t> order(n);
+  for (std::size_t k = 0; k < n; ++k) order[k] = k;
+  std::swap(order[9000], order[9001]);                                        // inside one piece
+  std::rotate(order.begin() + 15000, order.begin() + 15001, order.begin() + 17000);  // a shift across pieces
+  for (const std::size_t keep : {n, n - 100}) {
+    GasParticles g = store();
+    std::vector<std::size_t> o(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
+    g.permute(o);
+    ASSERT_EQ(g.size(), keep);
+    for (std::size_t k = 0; k < keep; ++k) {
+      const std::size_t was = o[k];
+      ASSERT_EQ(g.id[k], 1000 + was) << "slot " << k;
+      ASSERT_EQ(g.x[k].x, static_cast<double>(was));
+      ASSERT_EQ(g.u[k], 3.0 * static_cast<double>(was));
+      ASSERT_EQ(g.time_bin[k], static_cast<TimeBin>(was % 50));
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fountain
