@@ -74,14 +74,6 @@ long long RankExchange::sum(long long local) const {
   return out;
 }
 
-void RankExchange::min(std::span<std::int8_t> values) const {
-  check(MPI_Allreduce(MPI_IN_PLACE, values.data(), as_count(values.size()), MPI_INT8_T, MPI_MIN, impl_->comm),
-        "Allreduce(min)");
-  std::lock_guard lock(mutex_);
-  traffic_.bytes += values.size();
-  ++traffic_.messages;
-}
-
 std::vector<std::span<const char>> RankExchange::allgather(std::span<const char> mine) const {
   const int n = size_;
   long long my_size = static_cast<long long>(mine.size());
@@ -209,7 +201,6 @@ namespace {
 }  // namespace
 bool RankExchange::any(bool) const { no_mpi(); }
 long long RankExchange::sum(long long) const { no_mpi(); }
-void RankExchange::min(std::span<std::int8_t>) const { no_mpi(); }
 std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>) const { no_mpi(); }
 std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buffer>&) const { no_mpi(); }
 int RankExchange::post_recv(int, int, std::size_t) { no_mpi(); }

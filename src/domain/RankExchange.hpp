@@ -29,7 +29,6 @@ class RankExchange {
 
   bool any(bool local) const;
   long long sum(long long local) const;
-  void min(std::span<std::int8_t> values) const;   // element by element, in place
   // Every rank's buffer, indexed by rank (this rank's own included): views into storage
   // kept and reused by the exchange, valid until its next allgather.
   std::vector<std::span<const char>> allgather(std::span<const char> mine) const;

@@ -184,6 +184,7 @@ class Engine {
   void exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
                               const char* what, bool every_leaf = false);
   void finish_exchanges();
+  void combine_wake_requests();  // the limiter's requests of every rank, combined on every rank
   void add_measured_costs();
   // Halo mode.
   void find_holders();
@@ -245,6 +246,7 @@ class Engine {
   std::pair<std::int64_t, std::int64_t> last_exchange_ns_{0, 0};
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
+  std::vector<char> wake_buffer_;           // this rank's wake requests, packed for the others
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
   bool halo_mode_ = false;
   bool all_current_ = true;                 // every particle here as its owner has it

@@ -229,6 +229,29 @@ void Engine::sync_feedback_sites() {
       "feedback sites");
 }
 
+void Engine::combine_wake_requests() {
+  // Each rank's requests (particle, bin) go to every rank and are combined by the minimum:
+  // a few per step, where a reduction over the whole array sent a byte per particle.
+  wake_buffer_.clear();
+  MessageWriter w(wake_buffer_);
+  for (std::size_t i = 0; i < gas_.wake_bin.size(); ++i)
+    if (gas_.wake_bin[i] != kNoBin) {
+      w.put(static_cast<std::uint64_t>(i));
+      w.put(gas_.wake_bin[i]);
+    }
+  const auto all = ranks_->allgather(wake_buffer_);
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    MessageReader in(all[static_cast<std::size_t>(r)]);
+    while (!in.done()) {
+      const auto i = in.get<std::uint64_t>();
+      const auto bin = in.get<TimeBin>();
+      if (i >= gas_.wake_bin.size()) throw std::logic_error(fmt::format("rank {} asked to wake particle {} of {}", r, i, gas_.wake_bin.size()));
+      gas_.wake_bin[i] = std::min(gas_.wake_bin[i], bin);
+    }
+  }
+}
+
 void Engine::gather_state() {
   if (!halo_mode_ || all_current_ || space_.leaves().empty()) return;
   exchange_active_leaves(
@@ -247,7 +270,7 @@ void Engine::finish_exchanges() {
     exchange_halo();
   } else {
     sync_owned_cells(false);
-    if (config_.hydro.timestep_limiter) ranks_->min(gas_.wake_bin);
+    if (config_.hydro.timestep_limiter) combine_wake_requests();
   }
   ctx_->cover_exceeded = ranks_->any(ctx_->cover_exceeded.load());
   ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));

@@ -104,7 +104,7 @@ void Engine::exchange_halo() {
     // Any rank may ask to wake a particle of a leaf it reads. The requests are combined, the
     // woken particles join those whose state is sent, and each owner wakes its leaves now,
     // with the state as its tasks left it, as one rank does after the graph.
-    ranks_->min(gas_.wake_bin);
+    combine_wake_requests();
     for (int c : leaves) {
       if (!drifted_[static_cast<std::size_t>(c)]) continue;
       const Cell& cell = space_.cell(c);
