@@ -693,3 +693,33 @@ TEST(Executor, AllTasksGatedAndChainedStillRunAndPollsNeverOverlap) {
     EXPECT_GT(polls.load(), 0);
   }
 }
+
+// A failed task ends the run even while gates wait for messages that will never come (the
+// other ranks are about to be stopped): the idle threads stop polling and the error comes out.
+TEST(Executor, FailureWhileGatesWaitEndsTheRun) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  for (int threads : {1, 2}) {
+    TaskGraph g;
+    const int bad = g.add(ty, 0);
+    const int gated = g.add(ty, 1);
+    const int after = g.add(ty, 2);
+    g.depends(gated, after);
+    g.finalize();
+    Executor::Gates gates;
+    gates.tasks = {gated};
+    gates.poll = [](std::span<const int>, std::vector<int>&) {};  // never opens
+    Executor exec(threads);
+    std::atomic<int> ran_after{0};
+    EXPECT_THROW(exec.run(
+                     g,
+                     [&](const Task& t) {
+                       if (index_of(g, t) == bad) throw std::runtime_error("task failed");
+                       if (index_of(g, t) == after) ran_after.fetch_add(1);
+                     },
+                     nullptr, nullptr, &gates),
+                 std::runtime_error)
+        << threads << " threads";
+    EXPECT_EQ(ran_after.load(), 0);
+  }
+}

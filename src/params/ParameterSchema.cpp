@@ -115,7 +115,7 @@ const std::vector<ParamSpec>& parameter_schema() {
            "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),
       // domain decomposition (MPI)
       real("domain.repartition_imbalance", "0.1", 0, inf,
-           "Across MPI ranks: when the cells are recut, their owners are chosen anew if the most loaded rank's measured work exceeds the mean by more than this fraction (0: at every recut)."),
+           "Across MPI ranks: when the cells are recut, their owners are chosen anew if, in the work measured since they were last chosen, the most loaded rank's exceeds the mean by more than this fraction (0: at every recut)."),
   };
   return schema;
 }
