@@ -2,31 +2,51 @@
 """The strong-scaling table (Markdown) from benchmarks/results/scaling_*.json, as docs/performance.md shows it.
 
     /usr/bin/python3 benchmarks/scaling_report.py benchmarks/results
+
+Files are scaling_<problem>_<R>x<T>_<repeat>.json (strong_scaling.sh). Each row shows the run
+of median time per step among a layout's repeats, the range of its repeats, and its time per
+step over 1 x 2's in the same repeat (median and range of those ratios): the layouts of one
+repeat ran minutes apart, so the ratio is what the host's drift disturbs least.
 """
 import glob
 import json
 import os
+import statistics
 import sys
 
 
 def main(folder):
     runs = {}
     for path in sorted(glob.glob(os.path.join(folder, "scaling_*.json"))):
+        stem = os.path.basename(path)[: -len(".json")]
+        repeat = stem.rsplit("_", 1)[1] if stem.count("_") >= 3 else "1"
         with open(path) as f:
             r = json.load(f)
-        runs.setdefault(r["problem"], {})[r["ranks_x_threads"]] = r
-    lines = ["| problem | ranks x threads | wall (s) | steps | time per step (ms) | speed-up | efficiency | "
-             "sent per step, rank 0 (ghost messages; recuts) | messages per step | waiting share |",
+        runs.setdefault(r["problem"], {}).setdefault(r["ranks_x_threads"], {})[repeat] = r
+    lines = ["| problem | ranks x threads | runs | time per step (ms): median (range) | against 1 x 2, same run: "
+             "median (range) | speed-up | efficiency | sent per step, rank 0 (ghost messages; recuts) | "
+             "messages per step | waiting share |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     for problem, by_layout in runs.items():
-        base = by_layout.get("1x1")
+        def median_run(layout):
+            reps = by_layout[layout]
+            ordered = sorted(reps.values(), key=lambda r: r["step_ms"])
+            return ordered[(len(ordered) - 1) // 2]
+        base = median_run("1x1")["step_ms"] if "1x1" in by_layout else float("nan")
+        pair_base = by_layout.get("1x2", {})
         for layout in sorted(by_layout):
-            r = by_layout[layout]
+            reps = by_layout[layout]
+            r = median_run(layout)
+            steps = [x["step_ms"] for x in reps.values()]
+            ratios = [reps[k]["step_ms"] / pair_base[k]["step_ms"] for k in reps if k in pair_base]
+            against = (f"{statistics.median(ratios):.2f} ({min(ratios):.2f}-{max(ratios):.2f})"
+                       if ratios and layout != "1x2" else "-")
             cores = r["ranks"] * r["threads"]
-            speed = base["step_ms"] / r["step_ms"] if base else float("nan")
+            speed = base / r["step_ms"]
             lines.append(
-                f"| {problem} {r['particles']} | {layout} | {r['wall_s']:.1f} | {r['steps']} | {r['step_ms']:.1f} | "
-                f"{speed:.2f} | {speed / cores:.0%} | {r['bytes_sent_per_step_rank0'] / 1e6:.2f} MB "
+                f"| {problem} {r['particles']} | {layout} | {len(reps)} | {r['step_ms']:.1f} "
+                f"({min(steps):.1f}-{max(steps):.1f}) | {against} | {speed:.2f} | {speed / cores:.0%} | "
+                f"{r['bytes_sent_per_step_rank0'] / 1e6:.2f} MB "
                 f"({r.get('ghost_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB; "
                 f"{r.get('recut_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB) | "
                 f"{r['messages_sent_per_step_rank0']:.0f} | {r['waiting_share_rank0']:.0%} |")

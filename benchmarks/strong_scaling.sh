@@ -11,16 +11,19 @@ out="$root/benchmarks/results"
 mkdir -p "$out"
 mpirun_n() { mpirun --allow-run-as-root --oversubscribe --bind-to none -np "$@"; }
 layouts=${LAYOUTS:-"1x1 1x2 2x1"}
+rm -f "$out"/scaling_*.json
+for repeat in $(seq "${REPEATS:-3}"); do
 for layout in $layouts; do
   ranks=${layout%x*} threads=${layout#*x}
   if echo "${PROBLEMS:-sedov sphere}" | grep -q sedov; then
     mpirun_n "$ranks" "$root/build/benchmarks/fountain_run_bench" sedov --threads "$threads" \
-      --t-end "${SEDOV_T_END:-0.01}" --json "$out/scaling_sedov_$layout.json" > /dev/null
+      --t-end "${SEDOV_T_END:-0.01}" --json "$out/scaling_sedov_${layout}_$repeat.json" > /dev/null
   fi
   if echo "${PROBLEMS:-sedov sphere}" | grep -q sphere; then
     mpirun_n "$ranks" "$root/build/benchmarks/fountain_sphere_bench" -n 8000 --threads "$threads" \
       --star-formation --eps-cold 0.4 --eps-hot 0.4 --t-end "${SPHERE_T_END:-2e-5}" \
-      --json "$out/scaling_sphere_$layout.json" > /dev/null
+      --json "$out/scaling_sphere_${layout}_$repeat.json" > /dev/null
   fi
+done
 done
 "${PYTHON:-/usr/bin/python3}" "$root/benchmarks/scaling_report.py" "$out"
