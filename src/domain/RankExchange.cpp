@@ -117,12 +117,13 @@ std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buff
     recv_offsets[r] = as_count(in_total);
     in_total += static_cast<std::size_t>(in_sizes[r]);
   }
-  // MPI wants one contiguous send buffer.
-  Buffer out(out_total);
+  // MPI wants one contiguous send buffer (kept, like the receiving one, so that it is not
+  // zero-filled again at every exchange).
+  if (sending_.size() < out_total) sending_.resize(out_total);
   for (std::size_t r = 0; r < n; ++r)
-    if (send_counts[r] > 0) std::memcpy(out.data() + send_offsets[r], to[r].data(), to[r].size());
+    if (send_counts[r] > 0) std::memcpy(sending_.data() + send_offsets[r], to[r].data(), to[r].size());
   if (scattered_.size() < in_total) scattered_.resize(in_total);
-  check(MPI_Alltoallv(out.data(), send_counts.data(), send_offsets.data(), MPI_BYTE, scattered_.data(),
+  check(MPI_Alltoallv(sending_.data(), send_counts.data(), send_offsets.data(), MPI_BYTE, scattered_.data(),
                       recv_counts.data(), recv_offsets.data(), MPI_BYTE, impl_->comm),
         "Alltoallv");
   std::vector<std::span<const char>> in(n);

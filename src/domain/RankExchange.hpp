@@ -63,6 +63,7 @@ class RankExchange {
   mutable Traffic traffic_;
   mutable std::vector<char> gathered_;  // reused by allgather, so large exchanges do not fault in fresh pages
   mutable std::vector<char> scattered_;  // reused by alltoall, likewise
+  mutable std::vector<char> sending_;    // alltoall's contiguous send buffer, likewise
 };
 
 }  // namespace fountain::domain

@@ -29,6 +29,11 @@ struct FieldSlices {
     }
     std::size_t n = 0;
     for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
+    if (n == count) {  // every particle flagged (a leaf wholly active): one copy
+      if constexpr (kPack) s.put(f.data() + first, count);
+      else s.get(f.data() + first, count);
+      return;
+    }
     auto* bytes = [&] {
       if constexpr (kPack) return s.grow(n * sizeof(T));
       else return s.take(n * sizeof(T));
