@@ -85,7 +85,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
     for (int t = 0; t < n; ++t) count_unlocks(t);
   }
   if (records) records->assign(static_cast<std::size_t>(n), TaskRecord{});
-  // A gate is one more predecessor, released by the polling loop below.
+  // A gate is one more predecessor, released by a poll (open_gates below).
   std::vector<int> pending;
   if (gates)
     for (int t : gates->tasks)
@@ -108,10 +108,10 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   const std::int64_t t0 = now_ns();
   jobs_.store(0, std::memory_order_relaxed);
   // Polling for gates is done by the threads that run tasks, not by a thread of its own: a
-  // busy thread polls between tasks at most every kPollEvery, and the thread whose job ends
-  // with no other job running keeps polling until a gate opens. A separate polling thread
+  // busy thread polls between tasks at most every kPollEvery, and a thread that would
+  // otherwise idle keeps polling until a gate opens or work comes. A separate polling thread
   // woke every 20 us - 1 ms beside the workers; across two ranks on two cores its ~3,400
-  // context switches per second per rank cost the workers ~20% more time in the SPH loops
+  // context switches per second per rank cost the workers ~25% more time in the SPH loops
   // (Sedov 250k, 2 ranks x 1 thread, perf), more than a late message ever did.
   constexpr std::int64_t kPollEvery = 50'000;  // ns
   std::atomic<int> waiting_gates{static_cast<int>(pending.size())};
@@ -156,9 +156,10 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         open_gates();
     };
     // Called by each job as it ends: while gates wait and fewer jobs are under way than there
-    // are threads (so that a thread would idle), this thread polls. It first yields between polls (a message is often close), then naps, doubling, up to
-    // 1 ms: across more ranks than cores, the rank with work gets the core. The outer loop
-    // closes the race with a job that ended while this thread was leaving the loop.
+    // are threads (so that a thread would idle), this thread polls. It first yields between
+    // polls (a message is often close), then naps, doubling, up to 1 ms: across more ranks
+    // than cores, the rank with work gets the core. The outer loop closes the race with a job
+    // that ended while this thread was leaving the loop.
     auto poll_while_idle = [&] {
       auto idle = [&] {
         return waiting_gates.load(std::memory_order_acquire) > 0 &&

@@ -22,14 +22,12 @@ struct FieldSlices {
   template <class T>
   void operator()(std::vector<T>& f) const {
     if (static_cast<const void*>(&f) == skip) return;
-    if (flag.empty()) {
-      if constexpr (kPack) s.put(f.data() + first, count);
-      else s.get(f.data() + first, count);
-      return;
+    std::size_t n = count;
+    if (!flag.empty()) {
+      n = 0;
+      for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
     }
-    std::size_t n = 0;
-    for (std::size_t i = first; i < first + count; ++i) n += flag[i] ? 1 : 0;
-    if (n == count) {  // every particle flagged (a leaf wholly active): one copy
+    if (n == count) {  // no flags, or every particle flagged (a leaf wholly active): one copy
       if constexpr (kPack) s.put(f.data() + first, count);
       else s.get(f.data() + first, count);
       return;

@@ -246,7 +246,8 @@ void Engine::combine_wake_requests() {
     while (!in.done()) {
       const auto i = in.get<std::uint64_t>();
       const auto bin = in.get<TimeBin>();
-      if (i >= gas_.wake_bin.size()) throw std::logic_error(fmt::format("rank {} asked to wake particle {} of {}", r, i, gas_.wake_bin.size()));
+      if (i >= gas_.wake_bin.size())
+        throw std::logic_error(fmt::format("rank {} asked to wake particle {} of {}", r, i, gas_.wake_bin.size()));
       gas_.wake_bin[i] = std::min(gas_.wake_bin[i], bin);
     }
   }
