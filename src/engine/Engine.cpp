@@ -285,10 +285,10 @@ void Engine::drift_current() {
     executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l]); });
     return;
   }
-  std::vector<int> mine;
+  std::vector<int> held;  // not only this rank's own leaves (`mine`): every leaf it keeps current
   for (int c : leaves)
-    if (held_[static_cast<std::size_t>(c)]) mine.push_back(c);
-  executor_.for_each(mine.size(), [&](std::size_t l) { integration::drift(ctx, mine[l]); });
+    if (held_[static_cast<std::size_t>(c)]) held.push_back(c);
+  executor_.for_each(held.size(), [&](std::size_t l) { integration::drift(ctx, held[l]); });
 }
 
 void Engine::drift_all() {
