@@ -175,6 +175,37 @@ void BM_SpaceRecut(benchmark::State& state) {
 }
 BENCHMARK(BM_SpaceRecut)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
+// The neighbour lists of the leaves alone (Space::find_neighbours) over the recut lattice of
+// BM_SpaceRecut (250,000 particles, periodic, split size 256), on 1 or 2 executor threads.
+// Items are leaves.
+void BM_SpaceFindNeighbours(benchmark::State& state) {
+  const int threads = static_cast<int>(state.range(0));
+  tasks::Executor executor(threads);
+  const ForEach for_each = [&](std::size_t n, const std::function<void(std::size_t)>& fn) { executor.for_each(n, fn); };
+  GasParticles gas;
+  CollisionlessParticles dm;
+  const std::vector<Vec3> lattice = ics::bcc_lattice({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, 50, 50, 50);
+  gas.resize(lattice.size());
+  gas.x = lattice;
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    gas.h[i] = 0.025;
+    gas.id[i] = i;
+  }
+  SpaceConfig config;
+  config.periodic = true;
+  config.box_size = {1.0, 1.0, 1.0};
+  Space space(config);
+  space.recut(gas, dm, for_each);
+  for (auto _ : state) {
+    space.find_neighbours(for_each);
+    benchmark::DoNotOptimize(space.neighbours(space.leaves().front()).data());
+  }
+  state.counters["leaves"] = static_cast<double>(space.leaves().size());
+  state.counters["top_cells"] = static_cast<double>(space.top_grid()[0] * space.top_grid()[1] * space.top_grid()[2]);
+  state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(space.leaves().size()));
+}
+BENCHMARK(BM_SpaceFindNeighbours)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 BENCHMARK_MAIN();

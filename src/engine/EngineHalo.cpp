@@ -112,7 +112,7 @@ void Engine::exchange_halo() {
         if (gas_.wake_bin[i] != kNoBin) gas_moved_[i] = 1;
     }
     for (int c : leaves) {
-      if (!mine(c)) continue;
+      if (!mine(c) || !drifted_[static_cast<std::size_t>(c)]) continue;  // no requests elsewhere
       // One rank adds what the kicks radiated before waking, and what the wake gave back
       // after it: kept apart so that the sums round alike.
       Cell& cell = space_.cell(c);
@@ -122,7 +122,11 @@ void Engine::exchange_halo() {
       wake_radiated_[static_cast<std::size_t>(c)] = cell.radiated;
       cell.radiated = kicks;
     }
-    std::fill(gas_.wake_bin.begin(), gas_.wake_bin.end(), kNoBin);
+    for (int c : leaves) {
+      if (!drifted_[static_cast<std::size_t>(c)]) continue;
+      const Cell& cell = space_.cell(c);
+      std::fill_n(gas_.wake_bin.begin() + static_cast<std::ptrdiff_t>(cell.first), cell.count, kNoBin);
+    }
   }
   // Each drifted leaf's record goes to every rank (all take the same decisions from them);
   // its changed particles only to the ranks that hold a copy.

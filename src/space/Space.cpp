@@ -144,7 +144,7 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
     // regions (Sod's low-density half) into leaves of a few tens of particles with long
     // neighbour lists.
     if (config_.periodic) w = std::min(w, 0.25 * std::min({size_.x, size_.y, size_.z}));
-    for (int k = 0; k < 3; ++k) ntop[k] = std::clamp(static_cast<int>(std::floor(size_[k] / w)), 1, 128);
+    for (int k = 0; k < 3; ++k) ntop[k] = std::clamp(static_cast<int>(std::floor(size_[k] / w)), 1, kMaxTopPerAxis);
   }
   ntop_ = ntop;
   const Vec3 wtop{size_.x / ntop[0], size_.y / ntop[1], size_.z / ntop[2]};
@@ -253,9 +253,25 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
 void Space::find_neighbours(const ForEach& for_each) {
   neighbours_.assign(leaves_.size(), {});
   surroundings_.assign(leaves_.size(), {});
-  const std::function<void(std::size_t)> lists_of = [this](std::size_t l) {
-    if (cells_[static_cast<std::size_t>(leaves_[l])].count == 0) return;
-    for (int t : top_) collect_leaves(leaves_[l], t, neighbours_[l], surroundings_[l]);
+  // A top cell's cover bounds those of its leaves, so no leaf of a top cell farther than
+  // the largest top cover (or a leaf's surroundings reach) from a leaf is on its lists: only
+  // the top cells within that reach are walked, in the grid's order, as the whole grid was
+  // (walking every top cell for every leaf made the lists O(leaves x top cells)).
+  double top_cover = 0.0;
+  for (int t : top_) top_cover = std::max(top_cover, cells_[static_cast<std::size_t>(t)].r_cover);
+  const std::function<void(std::size_t)> lists_of = [this, top_cover](std::size_t l) {
+    const Cell& a = cells_[static_cast<std::size_t>(leaves_[l])];
+    if (a.count == 0) return;
+    const double reach = std::max(surroundings_reach(a), top_cover);
+    std::array<TopRange, 3> range;
+    for (int k = 0; k < 3; ++k) range[static_cast<std::size_t>(k)] = top_range(a, reach, k);
+    for (int i = 0; i < range[0].count; ++i)
+      for (int j = 0; j < range[1].count; ++j)
+        for (int m = 0; m < range[2].count; ++m) {
+          const int t = (range[0].index[static_cast<std::size_t>(i)] * ntop_[1] + range[1].index[static_cast<std::size_t>(j)]) * ntop_[2] +
+                        range[2].index[static_cast<std::size_t>(m)];
+          collect_leaves(leaves_[l], top_[static_cast<std::size_t>(t)], neighbours_[l], surroundings_[l]);
+        }
   };
   for_each_or_serial(for_each, leaves_.size(), lists_of);
 }
@@ -317,6 +333,27 @@ int Space::cell_at(const Vec3& x) const {
     if (next < 0) return c;
     c = next;
   }
+}
+
+Space::TopRange Space::top_range(const Cell& a, double reach, int k) const {
+  // A margin of 1e-6 of a top cell absorbs rounding: a top cell listed here and beyond
+  // reach is only walked for nothing; box_distance decides.
+  const int n = ntop_[static_cast<std::size_t>(k)];
+  const double w = size_[k] / n, margin = 1e-6 * w;
+  const double from = a.lo[k] - lo_[k] - reach - margin, to = a.lo[k] - lo_[k] + a.width[k] + reach + margin;
+  const long first = static_cast<long>(std::floor(from / w)), last = static_cast<long>(std::floor(to / w));
+  TopRange r;
+  if (last - first + 1 >= n) {
+    for (int i = 0; i < n; ++i) r.index[static_cast<std::size_t>(r.count++)] = i;
+  } else if (config_.periodic) {
+    // Nearest images: a range past either edge of the box continues on the other side.
+    for (long i = first; i <= last; ++i) r.index[static_cast<std::size_t>(r.count++)] = static_cast<int>(((i % n) + n) % n);
+    std::sort(r.index.begin(), r.index.begin() + r.count);
+  } else {
+    for (long i = std::max(first, 0L); i <= std::min(last, static_cast<long>(n) - 1); ++i)
+      r.index[static_cast<std::size_t>(r.count++)] = static_cast<int>(i);
+  }
+  return r;
 }
 
 // Leaves with gas below `node` whose boxes lie within reach of leaf `leaf`'s: its neighbours

@@ -87,6 +87,14 @@ class Space {
   struct SortState;
   void split(int c, SortState& s);
   void collect_leaves(int leaf, int node, std::vector<int>& neighbours, std::vector<int>& surroundings) const;
+  // The top-level grid's indices along axis k whose cells may lie within `reach` of cell a's
+  // box, ascending.
+  static constexpr int kMaxTopPerAxis = 128;
+  struct TopRange {
+    std::array<int, kMaxTopPerAxis> index;
+    int count = 0;
+  };
+  TopRange top_range(const Cell& a, double reach, int k) const;
   double wrap_delta(double d, int dim) const;
 
   SpaceConfig config_;
