@@ -436,10 +436,18 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.star_formation) starformation::form_stars(ctx, *sf, t.ci);
     else if (t.type == T.feedback_search) starformation::find_hot_neighbours(ctx, *sf, t.ci);
     else if (t.type == T.star_formation_done) {
-      // Feedback reads neighbours in any cell, as star formation left them.
-      if (ranks_) sync_owned_cells(true);
+      // Feedback reads neighbours in any cell, as star formation left them; it is their only
+      // reader before the exchange after the graph, so with no site on any rank (a run before
+      // its first stars) one sum replaces both exchanges.
+      if (ranks_) {
+        long long sites = 0;
+        for (int c : leaves)
+          if (mine(c)) sites += static_cast<long long>(sf->cells[static_cast<std::size_t>(c)].sites.size());
+        feedback_sites_anywhere_ = ranks_->sum(sites) > 0;
+        if (feedback_sites_anywhere_) sync_owned_cells(true);
+      }
     } else if (t.type == T.feedback_apply) {
-      if (ranks_) sync_feedback_sites();
+      if (ranks_ && feedback_sites_anywhere_) sync_feedback_sites();
       starformation::apply_feedback(ctx, *sf, leaves);
     } else if (t.type == T.send) {
       domain::RankExchange::Buffer b;

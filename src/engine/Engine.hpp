@@ -219,6 +219,7 @@ class Engine {
   int gravity_tree_task_ = -1;
   std::vector<int> refit_tasks_;
   int star_formation_done_task_ = -1, feedback_apply_task_ = -1;
+  bool feedback_sites_anywhere_ = true;  // across ranks: some rank has a feedback site this step
   std::unique_ptr<starformation::StarFormationState> sf_;
   starformation::StarFormationTally sf_total_, sf_last_step_;
   std::uint64_t next_id_ = 0;  // for spawned stars
