@@ -1,5 +1,7 @@
 #include "engine/CellMessages.hpp"
 
+#include <algorithm>
+#include <array>
 #include <type_traits>
 
 namespace fountain {
@@ -18,10 +20,10 @@ struct FieldSlices {
   Stream& s;
   std::size_t first, count;
   std::span<const char> flag = {};
-  const void* skip = nullptr;
+  std::array<const void*, 6> skip = {};  // fields left out
   template <class T>
   void operator()(std::vector<T>& f) const {
-    if (static_cast<const void*>(&f) == skip) return;
+    if (std::find(skip.begin(), skip.end(), static_cast<const void*>(&f)) != skip.end()) return;
     std::size_t n = count;
     if (!flag.empty()) {
       n = 0;
@@ -79,24 +81,36 @@ void ghost_fields(GasParticles& g, F&& f) {
 }
 }  // namespace
 
+namespace {
+// The wake requests never travel with a cell's state (the engine combines them apart).
+std::array<const void*, 6> gas_left_out(GasParticles& gas, StateFields fields) {
+  if (fields == StateFields::All) return {&gas.wake_bin};
+  return {&gas.wake_bin, &gas.id, &gas.mass_initial, &gas.x};
+}
+std::array<const void*, 6> dm_left_out(CollisionlessParticles& dm, StateFields fields) {
+  if (fields == StateFields::All) return {};
+  return {&dm.id, &dm.species, &dm.birth_time, &dm.parent_id, &dm.mass, &dm.x};
+}
+}  // namespace
+
 void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
-                     std::span<const char> gas_moved, std::span<const char> dm_moved) {
+                     std::span<const char> gas_moved, std::span<const char> dm_moved, StateFields fields) {
   const Cell& cell = space.cell(c);
   w.put(cell);
-  gas.for_each_field(PackFields{w, cell.first, cell.count, gas_moved, &gas.wake_bin});
-  dm.for_each_field(PackFields{w, cell.dm_first, cell.dm_count, dm_moved});
+  gas.for_each_field(PackFields{w, cell.first, cell.count, gas_moved, gas_left_out(gas, fields)});
+  dm.for_each_field(PackFields{w, cell.dm_first, cell.dm_count, dm_moved, dm_left_out(dm, fields)});
 }
 
 void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
-                       std::span<const char> gas_moved, std::span<const char> dm_moved) {
+                       std::span<const char> gas_moved, std::span<const char> dm_moved, StateFields fields) {
   Cell& cell = space.cell(c);
   const Cell sent = r.get<Cell>();
   if (sent.first != cell.first || sent.count != cell.count || sent.dm_first != cell.dm_first ||
       sent.dm_count != cell.dm_count)
     throw std::logic_error("ranks disagree on a cell's particles");
   cell = sent;
-  gas.for_each_field(UnpackFields{r, cell.first, cell.count, gas_moved, &gas.wake_bin});
-  dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved});
+  gas.for_each_field(UnpackFields{r, cell.first, cell.count, gas_moved, gas_left_out(gas, fields)});
+  dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved, dm_left_out(dm, fields)});
 }
 
 void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved) {

@@ -71,6 +71,13 @@ class MessageReader {
   std::size_t at_ = 0;
 };
 
+// Which fields a cell's state carries. `All`: every one. `StepChanged`: only what a step's
+// tasks can change, for ranks that drift every cell themselves (the replicated state):
+// positions change only by the drift, which every rank repeats bit for bit, and identity,
+// initial gas mass and the collisionless particles' species, birth, parent and mass never
+// change once a particle is made (spawning makes them alike on every rank).
+enum class StateFields { All, StepChanged };
+
 // Everything about leaf c: the cell's own record and every field of its gas and collisionless
 // particles, except the gas's wake requests (which any rank may make of any particle, and
 // which the engine combines across ranks separately).
@@ -78,9 +85,11 @@ class MessageReader {
 // those active in the step, the only ones a cell's own tasks change (the sender and the
 // receiver flag the same ones, from the bins at the start of the step).
 void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
-                     std::span<const char> gas_moved, std::span<const char> dm_moved);
+                     std::span<const char> gas_moved, std::span<const char> dm_moved,
+                     StateFields fields = StateFields::All);
 void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
-                       std::span<const char> gas_moved, std::span<const char> dm_moved);
+                       std::span<const char> gas_moved, std::span<const char> dm_moved,
+                       StateFields fields = StateFields::All);
 
 // What a step changes in a leaf's own record (the rest stands from one recut to the next):
 // sent by its owner to every rank, so that all take the same decisions (next time, recut).

@@ -217,8 +217,13 @@ void Engine::exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buf
 void Engine::sync_owned_cells(bool gas_cells_only) {
   exchange_active_leaves(
       gas_cells_only, sync_buffer_,
-      [&](MessageWriter& w, int c) { pack_cell_state(w, space_, gas_, dm_, c, gas_moved_, dm_moved_); },
-      [&](MessageReader& r, int c) { unpack_cell_state(r, space_, gas_, dm_, c, gas_moved_, dm_moved_); }, "cell state");
+      [&](MessageWriter& w, int c) {
+        pack_cell_state(w, space_, gas_, dm_, c, gas_moved_, dm_moved_, StateFields::StepChanged);
+      },
+      [&](MessageReader& r, int c) {
+        unpack_cell_state(r, space_, gas_, dm_, c, gas_moved_, dm_moved_, StateFields::StepChanged);
+      },
+      "cell state");
 }
 
 void Engine::sync_feedback_sites() {
