@@ -108,16 +108,22 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
   const std::int64_t t0 = now_ns();
   jobs_.store(0, std::memory_order_relaxed);
   // Polling for gates is done by the threads that run tasks, not by a thread of its own: a
-  // busy thread polls between tasks at most every kPollEvery, and a thread that would
+  // busy thread polls between tasks once poll_every has passed, and a thread that would
   // otherwise idle keeps polling until a gate opens or work comes. A separate polling thread
   // woke every 20 us - 1 ms beside the workers; across two ranks on two cores its ~3,400
   // context switches per second per rank cost the workers ~25% more time in the SPH loops
   // (Sedov 250k, 2 ranks x 1 thread, perf), more than a late message ever did.
-  constexpr std::int64_t kPollEvery = 50'000;  // ns
+  // A busy thread's interval starts at kPollEvery, doubles after each poll that opens
+  // nothing, up to kPollEveryMost, and starts again when one opens a gate: each poll tests
+  // every waiting receive, and at a fixed 50 us the polls of a full Sedov step cost ~4 ms of
+  // 270 (half of that with the interval let grow), while messages that do flow are seen soon.
+  constexpr std::int64_t kPollEvery = 50'000, kPollEveryMost = 1'000'000;  // ns
   std::atomic<int> waiting_gates{static_cast<int>(pending.size())};
   std::atomic<bool> poll_lock{false};     // one poll at a time: it owns `pending`
   std::atomic<bool> poller{false};        // a thread is in the idle polling loop
   std::atomic<std::int64_t> last_poll{now_ns()};
+  std::int64_t poll_every = kPollEvery;   // guarded by poll_lock
+  std::atomic<std::int64_t> due_every{kPollEvery};  // its value for threads deciding to poll
 
   tbb::task_arena& arena = *arena_;
   arena.execute([&] {
@@ -146,13 +152,15 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
         if (wait[static_cast<std::size_t>(t)].fetch_sub(1, std::memory_order_acq_rel) == 1) spawn(t);
       }
       const std::size_t opened = opened_now.size();
+      poll_every = opened > 0 ? kPollEvery : std::min(2 * poll_every, kPollEveryMost);
       last_poll.store(now_ns(), std::memory_order_relaxed);
+      due_every.store(poll_every, std::memory_order_relaxed);
       poll_lock.store(false, std::memory_order_release);
       return opened;
     };
     auto poll_if_due = [&] {
       if (waiting_gates.load(std::memory_order_acquire) > 0 &&
-          now_ns() - last_poll.load(std::memory_order_relaxed) >= kPollEvery)
+          now_ns() - last_poll.load(std::memory_order_relaxed) >= due_every.load(std::memory_order_relaxed))
         open_gates();
     };
     // Called by each job as it ends: while gates wait and fewer jobs are under way than there
