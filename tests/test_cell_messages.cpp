@@ -228,6 +228,37 @@ TEST_F(TwoRanks, MovedGasCarriesTheStepFieldsOfFlaggedParticlesOnly) {
   }
 }
 
+TEST_F(TwoRanks, MovedGasAfterTheGhostResultsLeavesThemToTheGhostMessage) {
+  const int c = space.leaves()[space.leaves().size() / 3];
+  const Cell& cell = space.cell(c);
+  ASSERT_GT(cell.count, 2u);
+  GasParticles sent = gas, got = gas;
+  scramble(sent, 15);
+  scramble(got, 16);
+  const GasParticles before = got;
+  std::vector<char> moved(gas.size(), 0);
+  std::size_t flagged = 0;
+  for (std::size_t i = cell.first; i < cell.first + cell.count; i += 2) moved[i] = 1, ++flagged;
+  std::vector<char> all, after_ghost;
+  MessageWriter wa(all), wg(after_ghost);
+  pack_moved_gas(wa, space, sent, c, moved);
+  pack_moved_gas(wg, space, sent, c, moved, true);
+  std::size_t ghost_bytes = 0;
+  ghost_fields(sent, [&](auto& f) { ghost_bytes += sizeof(f[0]); });
+  EXPECT_EQ(all.size() - after_ghost.size(), flagged * ghost_bytes) << "only the ghost's results are left out";
+  MessageReader r(after_ghost);
+  unpack_moved_gas(r, space, got, c, moved, true);
+  EXPECT_TRUE(r.done());
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (!moved[i]) continue;
+    EXPECT_TRUE(same_bytes(got.v_full[i], sent.v_full[i])) << i;
+    EXPECT_TRUE(same_bytes(got.du_dt[i], sent.du_dt[i])) << i;
+    EXPECT_TRUE(same_bytes(got.limit_bin[i], sent.limit_bin[i])) << i;
+    EXPECT_TRUE(same_bytes(got.rho[i], before.rho[i])) << "rho came by the ghost message, not again: " << i;
+    EXPECT_TRUE(same_bytes(got.balsara[i], before.balsara[i])) << i;
+  }
+}
+
 TEST_F(TwoRanks, ScatteredParticlesComeBackWhole) {
   GasParticles sent = gas, got = gas;
   scramble(sent, 8);

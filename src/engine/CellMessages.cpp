@@ -74,11 +74,6 @@ struct FieldPicks {
   }
 };
 
-template <class F>
-void ghost_fields(GasParticles& g, F&& f) {
-  f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
-  f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
-}
 }  // namespace
 
 namespace {
@@ -113,14 +108,18 @@ void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, Collis
   dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved, dm_left_out(dm, fields)});
 }
 
-void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved) {
+void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
+                    bool ghost_results_sent) {
   const Cell& cell = space.cell(c);
-  halo_step_fields(gas, PackFields{w, cell.first, cell.count, moved});
+  if (ghost_results_sent) step_fields_after_ghost(gas, PackFields{w, cell.first, cell.count, moved});
+  else halo_step_fields(gas, PackFields{w, cell.first, cell.count, moved});
 }
 
-void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved) {
+void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
+                      bool ghost_results_sent) {
   const Cell& cell = space.cell(c);
-  halo_step_fields(gas, UnpackFields{r, cell.first, cell.count, moved});
+  if (ghost_results_sent) step_fields_after_ghost(gas, UnpackFields{r, cell.first, cell.count, moved});
+  else halo_step_fields(gas, UnpackFields{r, cell.first, cell.count, moved});
 }
 
 void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c) {

@@ -108,17 +108,32 @@ struct CellUpdate {
 // between recuts in such a run: identity and masses (and the star formation fields) do not
 // change, positions change by the drift alone, and gravity's fields are unused. Listed
 // field by field so that a field added to GasParticles must be placed (a test checks).
+// They are the ghost's results (ghost_fields) and what later tasks change.
+template <class F>
+void ghost_fields(GasParticles& g, F&& f) {
+  f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
+  f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
+}
+template <class F>
+void step_fields_after_ghost(GasParticles& g, F&& f) {
+  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.rho_msph); f(g.h_msph); f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool);
+  f(g.time_bin); f(g.ti_begin); f(g.limit_bin);
+}
 template <class F>
 void halo_step_fields(GasParticles& g, F&& f) {
-  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.h); f(g.rho); f(g.rho_msph); f(g.h_msph); f(g.wcount);
-  f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
-  f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool); f(g.time_bin); f(g.ti_begin); f(g.courant_bin); f(g.limit_bin);
+  ghost_fields(g, f);
+  step_fields_after_ghost(g, f);
 }
 
 // The halo_step_fields of leaf c's gas particles flagged in `moved`, without the cell's
-// record: what its owner's tasks changed, for the ranks that hold a copy.
-void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved);
-void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved);
+// record: what its owner's tasks changed, for the ranks that hold a copy. A rank that had
+// the leaf's ghost results in this graph (its send/recv) has the ghost_fields already, as
+// they stand at the end of the graph (nothing after the ghost writes them, up to the next
+// drift): `ghost_results_sent` then leaves them out.
+void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
+                    bool ghost_results_sent = false);
+void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
+                      bool ghost_results_sent = false);
 
 // What a recut reads of leaf c's gas (positions, h, v_full) and what the rebuild then reads
 // (the time bins and step starts), so that every rank recuts alike.

@@ -355,6 +355,7 @@ std::size_t Engine::activate(Phase phase) {
       step_tasks_.push_back(t);
     }
   const bool exchange = ranks_ && phase != Phase::Density;
+  ghost_exchange_ = exchange;
   if (exchange) plan_ghost_exchange();
   auto allowed = [&](int type) {
     if (phase == Phase::Density) return type == types_.density || type == types_.ghost;

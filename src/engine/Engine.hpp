@@ -241,6 +241,7 @@ class Engine {
   std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
   std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run
+  bool ghost_exchange_ = false;             // this run of the graph sends ghost results (send_to_, need_recv_ hold)
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
   std::vector<std::pair<Vec3, double>> work_since_cut_;  // (leaf centre, task ns) measured since the cut, before this interval
   double graph_s_ = 0.0, exchange_s_ = 0.0;

@@ -137,7 +137,10 @@ void Engine::exchange_halo() {
           if (!drifted_[uc] || !mine(c)) continue;
           w.put(CellUpdate::of(space_.cell(c)));
           w.put(wake_radiated_[uc]);
-          if (holds(q, c)) pack_moved_gas(w, space_, gas_, c, gas_moved_);
+          if (!holds(q, c)) continue;
+          const auto& to = send_to_[uc];
+          const bool ghost_sent = ghost_exchange_ && std::binary_search(to.begin(), to.end(), q);
+          pack_moved_gas(w, space_, gas_, c, gas_moved_, ghost_sent);
         }
       },
       [&](int r, MessageReader& reader) {
@@ -146,7 +149,7 @@ void Engine::exchange_halo() {
           if (!drifted_[uc] || owner_[uc] != r) continue;
           reader.get<CellUpdate>().apply_to(space_.cell(c));
           wake_radiated_[uc] = reader.get<double>();
-          if (held_[uc]) unpack_moved_gas(reader, space_, gas_, c, gas_moved_);
+          if (held_[uc]) unpack_moved_gas(reader, space_, gas_, c, gas_moved_, ghost_exchange_ && need_recv_[uc]);
         }
       },
       "cell state");
