@@ -74,9 +74,6 @@ struct FieldPicks {
   }
 };
 
-}  // namespace
-
-namespace {
 // The wake requests never travel with a cell's state (the engine combines them apart).
 std::array<const void*, 6> gas_left_out(GasParticles& gas, StateFields fields) {
   if (fields == StateFields::All) return {&gas.wake_bin};
