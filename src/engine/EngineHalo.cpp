@@ -138,8 +138,9 @@ void Engine::exchange_halo() {
           w.put(CellUpdate::of(space_.cell(c)));
           w.put(wake_radiated_[uc]);
           if (!holds(q, c)) continue;
-          const auto& to = send_to_[uc];
-          const bool ghost_sent = ghost_exchange_ && std::binary_search(to.begin(), to.end(), q);
+          // send_to_ is planned only for graphs that exchange ghost results.
+          const bool ghost_sent =
+              ghost_exchange_ && std::binary_search(send_to_[uc].begin(), send_to_[uc].end(), q);
           pack_moved_gas(w, space_, gas_, c, gas_moved_, ghost_sent);
         }
       },
