@@ -144,31 +144,43 @@ BENCHMARK(BM_GravityTreeUpdate)->ArgName("refit")->Arg(0)->Arg(1)->Unit(benchmar
 // particle order, the permutation of every field) over a 250,000-particle BCC lattice in a
 // periodic box, nudged between recuts as particles are between the engine's rebuilds, on 1
 // or 2 executor threads (the argument). Items are particles.
-void BM_SpaceRecut(benchmark::State& state) {
-  const int threads = static_cast<int>(state.range(0));
-  tasks::Executor executor(threads);
-  const ForEach for_each = [&](std::size_t n, const std::function<void(std::size_t)>& fn) { executor.for_each(n, fn); };
+// The Space benchmarks' set-up: a 250,000-particle BCC lattice (h = 0.025) in a periodic
+// unit box, recut once, on `threads` executor threads.
+struct RecutLattice {
+  tasks::Executor executor;
+  ForEach for_each;
   GasParticles gas;
   CollisionlessParticles dm;
-  const std::vector<Vec3> lattice = ics::bcc_lattice({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, 50, 50, 50);
-  gas.resize(lattice.size());
-  gas.x = lattice;
-  for (std::size_t i = 0; i < gas.size(); ++i) {
-    gas.h[i] = 0.025;
-    gas.id[i] = i;
+  Space space;
+  explicit RecutLattice(int threads) : executor(threads), space(periodic_unit_box()) {
+    for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor.for_each(n, fn); };
+    const std::vector<Vec3> lattice = ics::bcc_lattice({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, 50, 50, 50);
+    gas.resize(lattice.size());
+    gas.x = lattice;
+    for (std::size_t i = 0; i < gas.size(); ++i) {
+      gas.h[i] = 0.025;
+      gas.id[i] = i;
+    }
+    space.recut(gas, dm, for_each);
   }
-  SpaceConfig config;
-  config.periodic = true;
-  config.box_size = {1.0, 1.0, 1.0};
-  Space space(config);
-  space.recut(gas, dm, for_each);
+  static SpaceConfig periodic_unit_box() {
+    SpaceConfig config;
+    config.periodic = true;
+    config.box_size = {1.0, 1.0, 1.0};
+    return config;
+  }
+};
+
+void BM_SpaceRecut(benchmark::State& state) {
+  RecutLattice l(static_cast<int>(state.range(0)));
+  GasParticles& gas = l.gas;
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> U(-2e-3, 2e-3);
   for (auto _ : state) {
     state.PauseTiming();
     for (Vec3& x : gas.x) x += Vec3{U(rng), U(rng), U(rng)};
     state.ResumeTiming();
-    space.recut(gas, dm, for_each);
+    l.space.recut(gas, l.dm, l.for_each);
     benchmark::DoNotOptimize(gas.x.data());
   }
   state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(gas.size()));
@@ -179,25 +191,10 @@ BENCHMARK(BM_SpaceRecut)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kM
 // BM_SpaceRecut (250,000 particles, periodic, split size 256), on 1 or 2 executor threads.
 // Items are leaves.
 void BM_SpaceFindNeighbours(benchmark::State& state) {
-  const int threads = static_cast<int>(state.range(0));
-  tasks::Executor executor(threads);
-  const ForEach for_each = [&](std::size_t n, const std::function<void(std::size_t)>& fn) { executor.for_each(n, fn); };
-  GasParticles gas;
-  CollisionlessParticles dm;
-  const std::vector<Vec3> lattice = ics::bcc_lattice({0.0, 0.0, 0.0}, {1.0, 1.0, 1.0}, 50, 50, 50);
-  gas.resize(lattice.size());
-  gas.x = lattice;
-  for (std::size_t i = 0; i < gas.size(); ++i) {
-    gas.h[i] = 0.025;
-    gas.id[i] = i;
-  }
-  SpaceConfig config;
-  config.periodic = true;
-  config.box_size = {1.0, 1.0, 1.0};
-  Space space(config);
-  space.recut(gas, dm, for_each);
+  RecutLattice l(static_cast<int>(state.range(0)));
+  const Space& space = l.space;
   for (auto _ : state) {
-    space.find_neighbours(for_each);
+    l.space.find_neighbours(l.for_each);
     benchmark::DoNotOptimize(space.neighbours(space.leaves().front()).data());
   }
   state.counters["leaves"] = static_cast<double>(space.leaves().size());
