@@ -452,9 +452,13 @@ void Engine::run_graph(StepInfo* info) {
       starformation::apply_feedback(ctx, *sf, leaves);
     } else if (t.type == T.send) {
       domain::RankExchange::Buffer b;
+      b.reserve(ghost_results_bytes(space_, t.ci));
       MessageWriter w(b);
       pack_ghost_results(w, space_, gas_, t.ci);
-      for (int r : send_to_[static_cast<std::size_t>(t.ci)]) ranks_->post_send(r, t.ci, b);
+      // Each send keeps its buffer until it completes: copies for all but the last rank.
+      const std::vector<int>& to = send_to_[static_cast<std::size_t>(t.ci)];
+      for (std::size_t k = 0; k + 1 < to.size(); ++k) ranks_->post_send(to[k], t.ci, b);
+      if (!to.empty()) ranks_->post_send(to.back(), t.ci, std::move(b));
     } else if (t.type == T.recv) {
       const auto& b = ranks_->wait_recv(recv_handle_[static_cast<std::size_t>(t.ci)]);
       MessageReader r(b);
