@@ -185,6 +185,16 @@ class Engine {
                               const char* what, bool every_leaf = false);
   void finish_exchanges();
   void combine_wake_requests();  // the limiter's requests of every rank, combined on every rank
+  // Calls fn(i) for each gas particle of the leaves drifted in this run of the graph: the
+  // force loop asks to wake only neighbours of active particles, which are drifted.
+  template <class F>
+  void for_each_drifted_gas(F&& fn) const {
+    for (int c : space_.leaves()) {
+      if (!drifted_[static_cast<std::size_t>(c)]) continue;
+      const Cell& cell = space_.cell(c);
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) fn(i);
+    }
+  }
   void add_measured_costs();
   // Halo mode.
   void find_holders();

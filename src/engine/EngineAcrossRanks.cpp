@@ -237,19 +237,14 @@ void Engine::sync_feedback_sites() {
 void Engine::combine_wake_requests() {
   // Each rank's requests (particle, bin) go to every rank and are combined by the minimum:
   // a few per step, where a reduction over the whole array sent a byte per particle.
-  // Requests are made by the force loop for neighbours of active particles, so they lie in
-  // the leaves drifted in this graph: only those are scanned (each step, not every particle).
+  // Only the drifted leaves can hold requests, so only they are scanned, not every particle.
   wake_buffer_.clear();
   MessageWriter w(wake_buffer_);
-  for (int c : space_.leaves()) {
-    if (!drifted_[static_cast<std::size_t>(c)]) continue;
-    const Cell& cell = space_.cell(c);
-    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
-      if (gas_.wake_bin[i] != kNoBin) {
-        w.put(static_cast<std::uint64_t>(i));
-        w.put(gas_.wake_bin[i]);
-      }
-  }
+  for_each_drifted_gas([&](std::size_t i) {
+    if (gas_.wake_bin[i] == kNoBin) return;
+    w.put(static_cast<std::uint64_t>(i));
+    w.put(gas_.wake_bin[i]);
+  });
   const auto all = ranks_->allgather(wake_buffer_);
   for (int r = 0; r < ranks_->size(); ++r) {
     if (r == rank_) continue;

@@ -105,12 +105,9 @@ void Engine::exchange_halo() {
     // woken particles join those whose state is sent, and each owner wakes its leaves now,
     // with the state as its tasks left it, as one rank does after the graph.
     combine_wake_requests();
-    for (int c : leaves) {
-      if (!drifted_[static_cast<std::size_t>(c)]) continue;
-      const Cell& cell = space_.cell(c);
-      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
-        if (gas_.wake_bin[i] != kNoBin) gas_moved_[i] = 1;
-    }
+    for_each_drifted_gas([&](std::size_t i) {
+      if (gas_.wake_bin[i] != kNoBin) gas_moved_[i] = 1;
+    });
     for (int c : leaves) {
       if (!mine(c) || !drifted_[static_cast<std::size_t>(c)]) continue;  // no requests elsewhere
       // One rank adds what the kicks radiated before waking, and what the wake gave back
@@ -122,11 +119,7 @@ void Engine::exchange_halo() {
       wake_radiated_[static_cast<std::size_t>(c)] = cell.radiated;
       cell.radiated = kicks;
     }
-    for (int c : leaves) {
-      if (!drifted_[static_cast<std::size_t>(c)]) continue;
-      const Cell& cell = space_.cell(c);
-      std::fill_n(gas_.wake_bin.begin() + static_cast<std::ptrdiff_t>(cell.first), cell.count, kNoBin);
-    }
+    for_each_drifted_gas([&](std::size_t i) { gas_.wake_bin[i] = kNoBin; });
   }
   // Each drifted leaf's record goes to every rank (all take the same decisions from them);
   // its changed particles only to the ranks that hold a copy.
