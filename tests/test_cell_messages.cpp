@@ -197,16 +197,30 @@ TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep)
   EXPECT_EQ(sent.size() + unchanged.size(), fields);
 }
 
+// A leaf's sender and receiver copies, differing everywhere, with every other particle of
+// the leaf flagged as moved.
+struct MovedGasCase {
+  int c;
+  GasParticles sent, got, before;
+  std::vector<char> moved;
+  std::size_t flagged = 0;
+  MovedGasCase(const Space& space, const GasParticles& gas, unsigned seed)
+      : c(space.leaves()[space.leaves().size() / 3]), sent(gas), got(gas), moved(gas.size(), 0) {
+    scramble(sent, seed);
+    scramble(got, seed + 1);
+    before = got;
+    const Cell& cell = space.cell(c);
+    for (std::size_t i = cell.first; i < cell.first + cell.count; i += 2) moved[i] = 1, ++flagged;
+  }
+};
+
 TEST_F(TwoRanks, MovedGasCarriesTheStepFieldsOfFlaggedParticlesOnly) {
-  const int c = space.leaves()[space.leaves().size() / 3];
-  const Cell& cell = space.cell(c);
-  ASSERT_GT(cell.count, 2u);
-  GasParticles sent = gas, got = gas;
-  scramble(sent, 6);
-  scramble(got, 7);
-  const GasParticles before = got;
-  std::vector<char> moved(gas.size(), 0);
-  for (std::size_t i = cell.first; i < cell.first + cell.count; i += 2) moved[i] = 1;
+  MovedGasCase m(space, gas, 6);
+  const int c = m.c;
+  ASSERT_GT(space.cell(c).count, 2u);
+  GasParticles &sent = m.sent, &got = m.got;
+  const GasParticles& before = m.before;
+  const std::vector<char>& moved = m.moved;
   std::vector<char> buffer;
   MessageWriter w(buffer);
   pack_moved_gas(w, space, sent, c, moved);
@@ -229,16 +243,14 @@ TEST_F(TwoRanks, MovedGasCarriesTheStepFieldsOfFlaggedParticlesOnly) {
 }
 
 TEST_F(TwoRanks, MovedGasAfterTheGhostResultsLeavesThemToTheGhostMessage) {
-  const int c = space.leaves()[space.leaves().size() / 3];
+  MovedGasCase m(space, gas, 15);
+  const int c = m.c;
   const Cell& cell = space.cell(c);
   ASSERT_GT(cell.count, 2u);
-  GasParticles sent = gas, got = gas;
-  scramble(sent, 15);
-  scramble(got, 16);
-  const GasParticles before = got;
-  std::vector<char> moved(gas.size(), 0);
-  std::size_t flagged = 0;
-  for (std::size_t i = cell.first; i < cell.first + cell.count; i += 2) moved[i] = 1, ++flagged;
+  GasParticles &sent = m.sent, &got = m.got;
+  const GasParticles& before = m.before;
+  const std::vector<char>& moved = m.moved;
+  const std::size_t flagged = m.flagged;
   std::vector<char> all, after_ghost;
   MessageWriter wa(all), wg(after_ghost);
   pack_moved_gas(wa, space, sent, c, moved);
