@@ -51,7 +51,7 @@ using UnpackFields = FieldSlices<MessageReader>;
 
 template <class F>
 void recut_fields(GasParticles& g, F&& f) {
-  f(g.x); f(g.h); f(g.v_full); f(g.time_bin); f(g.ti_begin);
+  f(g.x); f(g.h);
 }
 
 // One particle at a time, field by field, for scattered indices.

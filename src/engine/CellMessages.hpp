@@ -135,8 +135,9 @@ void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
                       bool ghost_results_sent = false);
 
-// What a recut reads of leaf c's gas (positions, h, v_full) and what the rebuild then reads
-// (the time bins and step starts), so that every rank recuts alike.
+// What a recut needs of leaf c's gas so that every rank cuts the same cells: positions, and
+// h for the leaves' covers. (What the rebuild reads besides, the leaves' v_max and step ends,
+// each rank works out from the particles it owned, and a maximum over ranks settles it.)
 void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c);
 void unpack_recut_inputs(MessageReader& r, const Space& space, GasParticles& gas, int c);
 

@@ -102,6 +102,7 @@ void Engine::guess_smoothing_lengths() {
 }
 
 void Engine::rebuild() {
+  const auto t_rebuild = std::chrono::steady_clock::now();
   // Every particle must sit at the current time before cells are recut.
   drift_current();
   remove_dissolved();
@@ -135,16 +136,26 @@ void Engine::rebuild() {
     const bool due = TimeLine::active(bin, ti_current_) && (!initialised_ || ti_begin != ti_current_);
     return due ? ti_current_ : TimeLine::step_end(bin, ti_current_);
   };
+  // With shared recut inputs, only the particles this rank owned have current velocities and
+  // bins: each leaf's v_max and step end are taken over those here, and combined below.
+  auto current = [&](std::size_t i) {
+    return !migrate || old_owner[static_cast<std::size_t>(old_leaf[order[i]])] == rank_;
+  };
   for (int c : space_.leaves()) {
     Cell& cell = space_.cell(c);
     cell.ti_drift = ti_current_;
     IntegerTime end = TimeLine::ticks;
-    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+    if (migrate) cell.v_max = 0.0;
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+      if (!current(i)) continue;
       end = std::min(end, step_end(gas_.time_bin[i], gas_.ti_begin[i]));
+      if (migrate) cell.v_max = std::max(cell.v_max, norm(gas_.v_full[i]));
+    }
     for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
       end = std::min(end, step_end(dm_.time_bin[i], dm_.ti_begin[i]));
     cell.ti_end_min = end;
   }
+  if (migrate) combine_recut_records();
   ctx_->cover_exceeded = false;
   if (config_.gravity.enabled) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
@@ -166,6 +177,7 @@ void Engine::rebuild() {
     recut_bytes_ += ranks_->traffic().bytes - bytes_before;
   }
   rebuild_pending_ = false;
+  rebuild_s_ += seconds_since(t_rebuild);
 }
 
 void Engine::remove_dissolved() {

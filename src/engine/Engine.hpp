@@ -137,6 +137,9 @@ class Engine {
   // The exchanges after the last graph, in ns since it began ({0, 0} when running alone).
   std::pair<std::int64_t, std::int64_t> last_exchange_ns() const { return last_exchange_ns_; }
   double exchange_seconds() const { return exchange_s_; }
+  // Wall seconds in rebuilds (the drift before, the recut, the neighbour lists and graph,
+  // across ranks the owners and what goes between ranks with them).
+  double rebuild_seconds() const { return rebuild_s_; }
   // Whether this run keeps on each rank only its own leaves and their neighbours current
   // (MPI runs without gravity and star formation: docs/design.md, "Halo mode").
   bool halo_mode() const { return halo_mode_; }
@@ -199,6 +202,9 @@ class Engine {
   // Halo mode.
   void find_holders();
   void share_recut_inputs();
+  // After a recut with shared inputs: each leaf's v_max and ti_end_min, from the maxima and
+  // minima each rank found over the particles it owned before the recut.
+  void combine_recut_records();
   void migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
                            const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders);
   void exchange_halo();
@@ -254,7 +260,7 @@ class Engine {
   bool ghost_exchange_ = false;             // this run of the graph sends ghost results (send_to_, need_recv_ hold)
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
   std::vector<std::pair<Vec3, double>> work_since_cut_;  // (leaf centre, task ns) measured since the cut, before this interval
-  double graph_s_ = 0.0, exchange_s_ = 0.0;
+  double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
   std::pair<std::int64_t, std::int64_t> last_exchange_ns_{0, 0};
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstring>
 
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
@@ -67,6 +68,35 @@ void Engine::share_recut_inputs() {
             unpack_recut_inputs(reader, space_, gas_, c);
       },
       "recut inputs");
+}
+
+void Engine::combine_recut_records() {
+  // Maxima and minima are exact whatever the order, so every rank gets one rank's values.
+  struct Record {
+    double v_max;
+    IntegerTime ti_end_min;
+  };
+  const std::vector<int>& leaves = space_.leaves();
+  std::vector<Record> mine(leaves.size());
+  for (std::size_t l = 0; l < leaves.size(); ++l) {
+    const Cell& cell = space_.cell(leaves[l]);
+    mine[l] = {cell.v_max, cell.ti_end_min};
+  }
+  const auto all =
+      ranks_->allgather(std::span<const char>(reinterpret_cast<const char*>(mine.data()), mine.size() * sizeof(Record)));
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    const auto& in = all[static_cast<std::size_t>(r)];
+    if (in.size() != mine.size() * sizeof(Record))
+      throw std::logic_error(fmt::format("rank {} sent records of {} bytes for {} leaves", r, in.size(), leaves.size()));
+    for (std::size_t l = 0; l < leaves.size(); ++l) {
+      Record theirs;
+      std::memcpy(&theirs, in.data() + l * sizeof(Record), sizeof(Record));
+      Cell& cell = space_.cell(leaves[l]);
+      cell.v_max = std::max(cell.v_max, theirs.v_max);
+      cell.ti_end_min = std::min(cell.ti_end_min, theirs.ti_end_min);
+    }
+  }
 }
 
 void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
