@@ -105,15 +105,24 @@ void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const st
   // what it receives without being told.
   const auto n = static_cast<std::size_t>(ranks_->size());
   std::vector<std::vector<std::size_t>> send(n), recv(n);
+  // Which of a new leaf's holders lacked a current copy depends only on the old leaf, and
+  // most particles of a leaf come from one or two: it is found once per run of them.
+  std::vector<int> lacking;
   for (int c : space_.leaves()) {
     const Cell& cell = space_.cell(c);
     const auto& now = holders_[static_cast<std::size_t>(c)];
+    std::size_t last = static_cast<std::size_t>(-1);
     for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
       const auto was = static_cast<std::size_t>(old_leaf[order[i]]);
-      const auto& before = old_holders[was];
+      if (was != last) {
+        last = was;
+        const auto& before = old_holders[was];
+        lacking.clear();
+        for (int q : now)
+          if (!std::binary_search(before.begin(), before.end(), q)) lacking.push_back(q);
+      }
       const int from = old_owner[was];
-      for (int q : now) {
-        if (std::binary_search(before.begin(), before.end(), q)) continue;
+      for (int q : lacking) {
         if (from == rank_) send[static_cast<std::size_t>(q)].push_back(i);
         if (q == rank_) recv[static_cast<std::size_t>(from)].push_back(i);
       }
