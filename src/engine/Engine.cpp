@@ -435,7 +435,7 @@ void Engine::run_graph(StepInfo* info) {
   const std::vector<int>& leaves = space_.leaves();
   if (ranks_) post_receives();
   auto runner = [this, &ctx, &T, sf, &leaves](const tasks::Task& t) {
-    if (t.type == T.drift) integration::drift(ctx, t.ci);
+    if (t.type == T.drift) integration::drift(ctx, t.ci, true);
     else if (t.type == T.density) hydro::density(ctx, t.ci);
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
     else if (t.type == T.force) hydro::force(ctx, t.ci);

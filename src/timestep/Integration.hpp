@@ -6,7 +6,10 @@ namespace fountain::integration {
 
 // Predicts every particle of the cell to the current time: positions, velocities,
 // internal energy, h and density; freezes what the MSPH rule will read this step.
-void drift(StepContext& ctx, int c);
+// `before_ghosts`: the drift of a step's graph, whose ghosts then prepare the force inputs of
+// every active particle anew; without the MSPH rule nothing reads them before, so the drift
+// prepares them only for the inactive particles (the force loop reads those as predicted).
+void drift(StepContext& ctx, int c, bool before_ghosts = false);
 
 // Closes the step of each active particle with its second half-kick.
 void kick_close(StepContext& ctx, int c);
