@@ -36,16 +36,26 @@ inline std::string rank_fields(const Engine& e, const RankCounters& before, long
   const double per_step = steps > 0 ? 1.0 / static_cast<double>(steps) : 0.0;
   const double graph = now.graph_s - before.graph_s, exchange = now.exchange_s - before.exchange_s;
   const double thread_time = wall_s * e.threads();
+  // Each rank's own: a rank that waits for another shows it in its exchanges or graph gaps.
+  auto by_rank = [&](double mine) {
+    std::string s = "[";
+    for (double v : e.from_every_rank(mine)) s += fmt::format("{}{:.3f}", s.size() > 1 ? ", " : "", v);
+    return s + "]";
+  };
+  const std::string graph_by_rank = by_rank(graph), exchange_by_rank = by_rank(exchange),
+                    busy_by_rank = by_rank(busy_s), rebuild_by_rank = by_rank(now.rebuild_s - before.rebuild_s);
   const double waiting = thread_time > 0 ? ((graph * e.threads() - busy_s) + exchange * e.threads()) / thread_time : 0.0;
   return fmt::format(
       "\"ranks\": {}, \"ranks_x_threads\": \"{}x{}\", \"step_ms\": {:.4f}, \"bytes_sent_per_step_rank0\": {:.0f}, "
       "\"ghost_bytes_sent_per_step_rank0\": {:.0f}, \"recut_bytes_sent_per_step_rank0\": {:.0f}, \"messages_sent_per_step_rank0\": {:.1f}, \"graph_s_rank0\": {:.3f}, \"exchange_s_rank0\": {:.3f}, "
       "\"waiting_share_rank0\": {:.4f}, \"owner_cuts\": {}, \"halo_mode\": {}, \"held_share_rank0\": {:.4f}, "
-      "\"rebuild_s_rank0\": {:.3f}, \"cpu_s_rank0\": {:.3f}",
+      "\"rebuild_s_rank0\": {:.3f}, \"cpu_s_rank0\": {:.3f}, \"graph_s_by_rank\": {}, \"task_busy_s_by_rank\": {}, "
+      "\"exchange_s_by_rank\": {}, \"rebuild_s_by_rank\": {}",
       e.ranks(), e.ranks(), e.threads(), 1e3 * wall_s * per_step, (now.bytes - before.bytes) * per_step,
       (now.ghost_bytes - before.ghost_bytes) * per_step, (now.recut_bytes - before.recut_bytes) * per_step,
       (now.messages - before.messages) * per_step, graph, exchange, waiting, e.partitions(),
-      e.halo_mode() ? "true" : "false", e.held_share(), now.rebuild_s - before.rebuild_s, now.cpu_s - before.cpu_s);
+      e.halo_mode() ? "true" : "false", e.held_share(), now.rebuild_s - before.rebuild_s, now.cpu_s - before.cpu_s,
+      graph_by_rank, busy_by_rank, exchange_by_rank, rebuild_by_rank);
 }
 
 }  // namespace fountain::bench

@@ -129,6 +129,9 @@ class Engine {
   // Whether any rank says yes (the one rank's answer when alone): for decisions that every
   // rank must take together, such as writing a restart file.
   bool any_rank(bool yes) const;
+  // Every rank's value, in rank order (this rank's alone when running alone); every rank
+  // must call it.
+  std::vector<double> from_every_rank(double mine) const;
   // How often the cut of the leaves between ranks was chosen.
   int partitions() const { return partitions_; }
   // Wall seconds since the start: in the task graphs, and in the exchanges after them

@@ -49,6 +49,17 @@ std::pair<std::vector<std::size_t>, std::vector<std::size_t>> Engine::owned_part
 int Engine::rank() const { return rank_; }
 int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
 bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }
+
+std::vector<double> Engine::from_every_rank(double mine) const {
+  if (!ranks_) return {mine};
+  const auto all = ranks_->allgather(std::span<const char>(reinterpret_cast<const char*>(&mine), sizeof mine));
+  std::vector<double> out(all.size());
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    if (all[r].size() != sizeof(double)) throw std::logic_error(fmt::format("rank {} sent {} bytes for one value", r, all[r].size()));
+    std::memcpy(&out[r], all[r].data(), sizeof(double));
+  }
+  return out;
+}
 std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
 std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
 std::uint64_t Engine::ghost_bytes_sent() const { return ranks_ ? ranks_->traffic().point_to_point_bytes : 0; }
