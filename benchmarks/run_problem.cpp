@@ -16,9 +16,8 @@
 
 using namespace fountain;
 
-int main(int argc, char** argv) {
-  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
-  tasks::MpiSession mpi(&argc, &argv);
+namespace {
+int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   CLI::App app{"Fountain whole-run benchmark"};
   std::string problem, json_path;
   int threads = 1, resolution = 0, neighbours = 48, split = 256;
@@ -118,4 +117,17 @@ int main(int argc, char** argv) {
     if (!json_path.empty()) std::ofstream(json_path) << json;
   }
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
+  tasks::MpiSession mpi(&argc, &argv);
+  try {
+    return run(argc, argv, mpi);
+  } catch (const std::exception& e) {
+    // Bad input (a box too small for the neighbour number, say) is reported, not aborted on.
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
 }

@@ -22,9 +22,8 @@
 
 using namespace fountain;
 
-int main(int argc, char** argv) {
-  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
-  tasks::MpiSession mpi(&argc, &argv);
+namespace {
+int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   CLI::App app{"Fountain rotating-sphere benchmark"};
   int threads = 1, per_species = 8000;
   double t_end = 5.0e-5, softening = 0.001;
@@ -125,4 +124,17 @@ int main(int argc, char** argv) {
     if (!json_path.empty()) std::ofstream(json_path) << json;
   }
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
+  tasks::MpiSession mpi(&argc, &argv);
+  try {
+    return run(argc, argv, mpi);
+  } catch (const std::exception& e) {
+    // Bad input (a box too small for the neighbour number, say) is reported, not aborted on.
+    fmt::print(stderr, "error: {}\n", e.what());
+    return 1;
+  }
 }
