@@ -15,6 +15,7 @@
 #include <map>
 
 #include "engine/Engine.hpp"
+#include "BenchMain.hpp"
 #include "RankFields.hpp"
 #include "tasks/MpiSession.hpp"
 #include "ics/RotatingSphere.hpp"
@@ -23,6 +24,7 @@
 using namespace fountain;
 
 namespace {
+// Rank 0 writes the JSON.
 int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   CLI::App app{"Fountain rotating-sphere benchmark"};
   int threads = 1, per_species = 8000;
@@ -127,14 +129,4 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
 }
 }  // namespace
 
-int main(int argc, char** argv) {
-  // Under mpirun the run is split across the ranks (rank 0 writes the JSON).
-  tasks::MpiSession mpi(&argc, &argv);
-  try {
-    return run(argc, argv, mpi);
-  } catch (const std::exception& e) {
-    // Bad input (a box too small for the neighbour number, say) is reported, not aborted on.
-    fmt::print(stderr, "error: {}\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return bench::main_reporting_errors(argc, argv, run); }
