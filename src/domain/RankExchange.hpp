@@ -1,10 +1,15 @@
 // Messages between the MPI ranks of one run: the collectives and byte messages the engine's exchanges need.
 #pragma once
+#include <fmt/format.h>
+
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <mutex>
 #include <span>
+#include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 namespace fountain::domain {
@@ -32,6 +37,10 @@ class RankExchange {
   // Every rank's buffer, indexed by rank (this rank's own included): views into storage
   // kept and reused by the exchange, valid until its next allgather.
   std::vector<std::span<const char>> allgather(std::span<const char> mine) const;
+  // The same for values: every rank's `mine`, indexed by rank, each as long as this rank's
+  // (ranks that disagree on the length are a logic error, named by `what`).
+  template <class T>
+  std::vector<std::vector<T>> allgather_values(std::span<const T> mine, const char* what) const;
   // Each rank's buffer `to[q]` goes to rank q alone (this rank's own is skipped): what every
   // rank sent to this one, indexed by sender, as views valid until the next alltoall.
   std::vector<std::span<const char>> alltoall(const std::vector<Buffer>& to) const;
@@ -65,5 +74,18 @@ class RankExchange {
   mutable std::vector<char> scattered_;  // reused by alltoall, likewise
   mutable std::vector<char> sending_;    // alltoall's contiguous send buffer, likewise
 };
+
+template <class T>
+std::vector<std::vector<T>> RankExchange::allgather_values(std::span<const T> mine, const char* what) const {
+  static_assert(std::is_trivially_copyable_v<T>);
+  const auto all = allgather(std::span<const char>(reinterpret_cast<const char*>(mine.data()), mine.size_bytes()));
+  std::vector<std::vector<T>> out(all.size(), std::vector<T>(mine.size()));
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    if (all[r].size() != mine.size_bytes())
+      throw std::logic_error(fmt::format("rank {} sent {} bytes of {}, this rank {}", r, all[r].size(), what, mine.size_bytes()));
+    if (!mine.empty()) std::memcpy(out[r].data(), all[r].data(), mine.size_bytes());
+  }
+  return out;
+}
 
 }  // namespace fountain::domain

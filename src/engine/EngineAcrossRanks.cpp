@@ -52,12 +52,8 @@ bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; 
 
 std::vector<double> Engine::from_every_rank(double mine) const {
   if (!ranks_) return {mine};
-  const auto all = ranks_->allgather(std::span<const char>(reinterpret_cast<const char*>(&mine), sizeof mine));
-  std::vector<double> out(all.size());
-  for (std::size_t r = 0; r < all.size(); ++r) {
-    if (all[r].size() != sizeof(double)) throw std::logic_error(fmt::format("rank {} sent {} bytes for one value", r, all[r].size()));
-    std::memcpy(&out[r], all[r].data(), sizeof(double));
-  }
+  std::vector<double> out;
+  for (const auto& theirs : ranks_->allgather_values(std::span<const double>(&mine, 1), "one value")) out.push_back(theirs[0]);
   return out;
 }
 std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
@@ -70,15 +66,9 @@ std::vector<std::pair<Vec3, double>> Engine::measured_work() const {
   // order from an allgather (not a reduction, whose rounding may differ between ranks).
   std::vector<std::pair<Vec3, double>> measured;
   if (leaf_cost_.empty()) return measured;
-  domain::RankExchange::Buffer mine(leaf_cost_.size() * sizeof(double));
-  std::memcpy(mine.data(), leaf_cost_.data(), mine.size());
-  const auto all = ranks_->allgather(mine);
-  std::vector<double> total(leaf_cost_.size(), 0.0), part(leaf_cost_.size());
-  for (const auto& b : all) {
-    if (b.size() != mine.size()) throw std::logic_error("ranks disagree on the number of cells");
-    std::memcpy(part.data(), b.data(), b.size());
+  std::vector<double> total(leaf_cost_.size(), 0.0);
+  for (const auto& part : ranks_->allgather_values(std::span<const double>(leaf_cost_), "cell costs"))
     for (std::size_t c = 0; c < total.size(); ++c) total[c] += part[c];
-  }
   for (int c : space_.leaves())
     if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
   return measured;

@@ -2,7 +2,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cstring>
 
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
@@ -82,16 +81,11 @@ void Engine::combine_recut_records() {
     const Cell& cell = space_.cell(leaves[l]);
     mine[l] = {cell.v_max, cell.ti_end_min};
   }
-  const auto all =
-      ranks_->allgather(std::span<const char>(reinterpret_cast<const char*>(mine.data()), mine.size() * sizeof(Record)));
+  const auto all = ranks_->allgather_values(std::span<const Record>(mine), "leaf records");
   for (int r = 0; r < ranks_->size(); ++r) {
     if (r == rank_) continue;
-    const auto& in = all[static_cast<std::size_t>(r)];
-    if (in.size() != mine.size() * sizeof(Record))
-      throw std::logic_error(fmt::format("rank {} sent records of {} bytes for {} leaves", r, in.size(), leaves.size()));
     for (std::size_t l = 0; l < leaves.size(); ++l) {
-      Record theirs;
-      std::memcpy(&theirs, in.data() + l * sizeof(Record), sizeof(Record));
+      const Record& theirs = all[static_cast<std::size_t>(r)][l];
       Cell& cell = space_.cell(leaves[l]);
       cell.v_max = std::max(cell.v_max, theirs.v_max);
       cell.ti_end_min = std::min(cell.ti_end_min, theirs.ti_end_min);
