@@ -65,19 +65,26 @@ struct TwoRanks : ::testing::Test {
     space = Space(c);
     space.rebuild(gas, dm);
   }
+  // A sender's state and a receiver's copy that differs from it everywhere, for both species.
+  struct Sides {
+    GasParticles sent_gas, got_gas;
+    CollisionlessParticles sent_dm, got_dm;
+  };
+  Sides scrambled_sides(unsigned seed) const {
+    Sides s{gas, gas, dm, dm};
+    scramble(s.sent_gas, seed);
+    scramble(s.sent_dm, seed + 1);
+    scramble(s.got_gas, seed + 2);
+    scramble(s.got_dm, seed + 3);
+    return s;
+  }
 };
 
 TEST_F(TwoRanks, CellStateCarriesTheFlaggedParticlesOnlyAndNeverTheWakeRequests) {
   const int c = space.leaves()[space.leaves().size() / 2];
   const Cell cell = space.cell(c);
   ASSERT_GT(cell.count, 2u);
-  // The sender's state, and a receiver whose copy differs everywhere.
-  GasParticles sent_gas = gas, got_gas = gas;
-  CollisionlessParticles sent_dm = dm, got_dm = dm;
-  scramble(sent_gas, 1);
-  scramble(sent_dm, 2);
-  scramble(got_gas, 3);
-  scramble(got_dm, 4);
+  auto [sent_gas, got_gas, sent_dm, got_dm] = scrambled_sides(1);
   // Identity and the cell's ranges come from the shared recut, so they agree on both sides.
   sent_gas.id = got_gas.id = gas.id;
   std::vector<char> gas_moved(gas.size(), 0), dm_moved(dm.size(), 0);
@@ -117,12 +124,7 @@ TEST_F(TwoRanks, StepChangedStateLeavesOutWhatEveryRankKeepsAlikeAndCarriesTheRe
   const Cell cell = space.cell(c);
   ASSERT_GT(cell.count, 0u);
   ASSERT_GT(cell.dm_count, 0u);
-  GasParticles sent_gas = gas, got_gas = gas;
-  CollisionlessParticles sent_dm = dm, got_dm = dm;
-  scramble(sent_gas, 11);
-  scramble(sent_dm, 12);
-  scramble(got_gas, 13);
-  scramble(got_dm, 14);
+  auto [sent_gas, got_gas, sent_dm, got_dm] = scrambled_sides(11);
   const GasParticles before_gas = got_gas;
   const CollisionlessParticles before_dm = got_dm;
   const std::vector<char> gas_all(gas.size(), 1), dm_all(dm.size(), 1);
