@@ -112,7 +112,7 @@ void Engine::rebuild() {
   // In halo mode every rank recuts alike from the owners' positions; then each particle that
   // a rank now holds but held no current copy of comes from the owner of the leaf it was in.
   const bool migrate = halo_mode_ && !all_current_ && !space_.leaves().empty();
-  std::vector<std::size_t> order;
+  std::vector<std::size_t>& order = recut_order_;
   std::vector<int> old_leaf, old_owner;
   std::vector<std::vector<int>> old_holders;
   const std::uint64_t bytes_before = ranks_ ? ranks_->traffic().bytes : 0;

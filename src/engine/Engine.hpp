@@ -268,6 +268,7 @@ class Engine {
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<char> wake_buffer_;           // this rank's wake requests, packed for the others
+  std::vector<std::size_t> recut_order_;  // a migrating recut's permutation; its buffer is kept for the next
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
   bool halo_mode_ = false;
   bool all_current_ = true;                 // every particle here as its owner has it

@@ -65,8 +65,10 @@ struct CollisionlessParticles {
     birth_time[n] = born; parent_id[n] = parent;
   }
 
-  // Reorder every field by `order` (new index k holds old particle order[k]).
-  void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {});
+  // Reorder every field by `order` (new index k holds old particle order[k]); `scratch` as
+  // for GasParticles::permute.
+  void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {},
+               std::vector<std::byte>* scratch = nullptr);
 };
 
 }  // namespace fountain

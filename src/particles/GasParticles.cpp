@@ -56,16 +56,18 @@ std::vector<char> pieces_moved(const std::vector<std::size_t>& order) {
 }
 }  // namespace
 
-void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each) {
-  std::vector<std::byte> scratch;
+void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
+                           std::vector<std::byte>* scratch) {
+  std::vector<std::byte> own;
   const std::vector<char> moves = pieces_moved(order);
-  for_each_field(Reorder{order, moves, scratch, for_each});
+  for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each});
 }
 
-void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each) {
-  std::vector<std::byte> scratch;
+void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
+                                     std::vector<std::byte>* scratch) {
+  std::vector<std::byte> own;
   const std::vector<char> moves = pieces_moved(order);
-  for_each_field(Reorder{order, moves, scratch, for_each});
+  for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each});
 }
 
 }  // namespace fountain

@@ -107,8 +107,10 @@ struct GasParticles {
 
   // Reorder every field by `order` (new index k holds old particle order[k]); an order
   // shorter than the particle number keeps only the particles it names. Pieces of each field
-  // are moved through `for_each` when given.
-  void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {});
+  // are moved through `for_each` when given. A caller that permutes often passes `scratch`
+  // to keep between calls (a fresh buffer is zero-filled and faulted in each time).
+  void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {},
+               std::vector<std::byte>* scratch = nullptr);
 };
 
 }  // namespace fountain

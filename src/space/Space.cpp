@@ -82,7 +82,7 @@ void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t cou
 struct Space::SortState {
   GasParticles& gas;
   CollisionlessParticles& dm;
-  std::vector<std::size_t> order, scratch, dm_order, dm_scratch;
+  std::vector<std::size_t>&order, &scratch, &dm_order, &dm_scratch;
 };
 
 void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
@@ -157,17 +157,20 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
   };
   // Stable counting sort by top cell: returns where each top cell starts and fills `order`.
   auto sort_by_top = [&](const std::vector<Vec3>& xs, std::vector<std::size_t>& order) {
-    std::vector<std::size_t> key(xs.size());
+    std::vector<std::size_t>& key = sort_key_;
+    key.resize(xs.size());
     for (std::size_t i = 0; i < xs.size(); ++i) key[i] = top_cell(xs[i]);
     std::vector<std::size_t> start(ntot + 1, 0);
     for (std::size_t k : key) ++start[k + 1];
     for (std::size_t c = 0; c < ntot; ++c) start[c + 1] += start[c];
-    order.assign(xs.size(), 0);
+    order.resize(xs.size());  // every place is filled below
     std::vector<std::size_t> fill(start.begin(), start.end() - 1);
     for (std::size_t i = 0; i < xs.size(); ++i) order[fill[key[i]]++] = i;
     return start;
   };
-  SortState st{gas, dm, {}, std::vector<std::size_t>(n), {}, std::vector<std::size_t>(n_dm)};
+  sort_scratch_.resize(n);
+  dm_sort_scratch_.resize(n_dm);
+  SortState st{gas, dm, sort_order_, sort_scratch_, dm_sort_order_, dm_sort_scratch_};
   const std::vector<std::size_t> start = sort_by_top(gas.x, st.order);
   const std::vector<std::size_t> dm_start = sort_by_top(dm.x, st.dm_order);
 
@@ -204,9 +207,9 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
     order_leaf(gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, st.order, st.scratch);
     order_leaf(dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, st.dm_order, st.dm_scratch);
   });
-  gas.permute(st.order, for_each);
-  dm.permute(st.dm_order, for_each);
-  if (gas_order) *gas_order = std::move(st.order);
+  gas.permute(st.order, for_each, &permute_scratch_);
+  dm.permute(st.dm_order, for_each, &permute_scratch_);
+  if (gas_order) gas_order->swap(sort_order_);
 
   // The leaves' h_max and cover radii; inner nodes take the largest cover below them.
   for (int c = static_cast<int>(cells_.size()) - 1; c >= 0; --c) {

@@ -34,7 +34,7 @@ class Space {
   // a periodic box. The neighbour lists are stale until find_neighbours, which reads only the
   // cells (so the caller may meanwhile work on the particles, as the engine's tree build does).
   // `gas_order`, if given, receives the permutation: gas particle i after the recut is the one
-  // that was at gas_order[i] before it.
+  // that was at gas_order[i] before it (its old contents become the next recut's scratch).
   void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {},
              std::vector<std::size_t>* gas_order = nullptr);
   void find_neighbours(const ForEach& for_each = {});
@@ -107,6 +107,10 @@ class Space {
   std::vector<std::vector<int>> neighbours_;
   std::vector<std::vector<int>> surroundings_;
   int rebuilds_ = 0;
+  // Kept from one recut to the next: fresh buffers of this size (MBs) would be zero-filled and
+  // faulted in again at every recut.
+  std::vector<std::size_t> sort_order_, sort_scratch_, dm_sort_order_, dm_sort_scratch_, sort_key_;
+  std::vector<std::byte> permute_scratch_;
 };
 
 }  // namespace fountain
