@@ -14,10 +14,11 @@ namespace fountain::bench {
 struct RankCounters {
   double bytes = 0, messages = 0, graph_s = 0, exchange_s = 0, ghost_bytes = 0, recut_bytes = 0, rebuild_s = 0;
   double cpu_s = 0;  // user + system time of the whole process, every thread
+  int rebuilds = 0;
   static RankCounters of(const Engine& e) {
     return {static_cast<double>(e.bytes_sent()), static_cast<double>(e.messages_sent()), e.graph_seconds(),
             e.exchange_seconds(), static_cast<double>(e.ghost_bytes_sent()),
-            static_cast<double>(e.recut_bytes_sent()), e.rebuild_seconds(), process_cpu_seconds()};
+            static_cast<double>(e.recut_bytes_sent()), e.rebuild_seconds(), process_cpu_seconds(), e.space().rebuild_count()};
   }
   static double process_cpu_seconds() {
     rusage u{};
@@ -49,12 +50,12 @@ inline std::string rank_fields(const Engine& e, const RankCounters& before, long
       "\"ranks\": {}, \"ranks_x_threads\": \"{}x{}\", \"step_ms\": {:.4f}, \"bytes_sent_per_step_rank0\": {:.0f}, "
       "\"ghost_bytes_sent_per_step_rank0\": {:.0f}, \"recut_bytes_sent_per_step_rank0\": {:.0f}, \"messages_sent_per_step_rank0\": {:.1f}, \"graph_s_rank0\": {:.3f}, \"exchange_s_rank0\": {:.3f}, "
       "\"waiting_share_rank0\": {:.4f}, \"owner_cuts\": {}, \"halo_mode\": {}, \"held_share_rank0\": {:.4f}, "
-      "\"rebuild_s_rank0\": {:.3f}, \"cpu_s_rank0\": {:.3f}, \"graph_s_by_rank\": {}, \"task_busy_s_by_rank\": {}, "
+      "\"rebuilds\": {}, \"rebuild_s_rank0\": {:.3f}, \"cpu_s_rank0\": {:.3f}, \"graph_s_by_rank\": {}, \"task_busy_s_by_rank\": {}, "
       "\"exchange_s_by_rank\": {}, \"rebuild_s_by_rank\": {}",
       e.ranks(), e.ranks(), e.threads(), 1e3 * wall_s * per_step, (now.bytes - before.bytes) * per_step,
       (now.ghost_bytes - before.ghost_bytes) * per_step, (now.recut_bytes - before.recut_bytes) * per_step,
       (now.messages - before.messages) * per_step, graph, exchange, waiting, e.partitions(),
-      e.halo_mode() ? "true" : "false", e.held_share(), now.rebuild_s - before.rebuild_s, now.cpu_s - before.cpu_s,
+      e.halo_mode() ? "true" : "false", e.held_share(), now.rebuilds - before.rebuilds, now.rebuild_s - before.rebuild_s, now.cpu_s - before.cpu_s,
       graph_by_rank, busy_by_rank, exchange_by_rank, rebuild_by_rank);
 }
 

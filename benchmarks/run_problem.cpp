@@ -34,6 +34,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--viscosity-alpha", viscosity_alpha, "hydro.viscosity_alpha (the paper's 1.3 by default)");
   double neighbours_tolerance = HydroParams{}.neighbours_tolerance;
   app.add_option("--neighbours-tolerance", neighbours_tolerance, "hydro.neighbours_tolerance");
+  double skin = SpaceConfig{}.skin;
+  app.add_option("--skin", skin, "space.rebuild_skin");
   double repartition_imbalance = RunConfig{}.repartition_imbalance;
   app.add_option("--repartition-imbalance", repartition_imbalance, "domain.repartition_imbalance (across ranks)");
   app.add_option("--json", json_path);
@@ -66,6 +68,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.space.periodic = true;
   c.space.box_size = ic.box_size;
   c.space.split_size = split;
+  c.space.skin = skin;
   c.repartition_imbalance = repartition_imbalance;
   const std::size_t n = ic.gas.size();
 

@@ -38,6 +38,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--softening", softening, "dark matter softening (Mpc/h)");
   app.add_option("--msph", msph);
   app.add_option("--cooling", cooling);
+  double skin = SpaceConfig{}.skin;
+  app.add_option("--skin", skin, "space.rebuild_skin");
   app.add_option("--json", json_path);
   app.add_option("--ic", ic_path, "start from this HDF5 file's particles (GADGET layout, e.g. a snapshot)")
       ->check(CLI::ExistingFile);
@@ -62,6 +64,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.t_end = t_end;
   c.threads = threads;
   c.hydro.msph = msph;
+  c.space.skin = skin;
   c.integration.dt_min = 1e-12;
   c.integration.dt_max = 1e-6;
   c.gravity.enabled = true;
