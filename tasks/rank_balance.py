@@ -1,0 +1,109 @@
+#!/usr/bin/env python3
+"""Where a run across MPI ranks loses time to its ranks' differences, step by step.
+
+Reads the task timelines of a run (output.dump_timeline_every: 1 writes
+timeline_step<S>_rank<R>.csv for every step and rank) and prints, for full steps (every
+particle active) and partial steps apart:
+
+- each rank's time inside tasks (busy) and the graph's span, summed over the steps;
+- the imbalance: the sum over steps of the busiest rank's busy time minus the ranks' mean.
+  A rank with less to do, or whose core ran faster in that step, waits that long for the
+  other's messages or in the exchange after the graph;
+- the tail: the span beyond the busiest rank's busy time (latency, polling, idle starts);
+- per task type, how much faster the faster rank ran in the median step, relative to the
+  slower (the same work on both ranks, as in a symmetric problem, measures the cores).
+
+    tasks/rank_balance.py output/                 # a folder of timeline files
+    tasks/rank_balance.py output/ --per-step      # also one line per full step
+
+Needs only the standard library.
+"""
+import argparse
+import csv
+import glob
+import os
+import re
+import statistics
+import sys
+from collections import defaultdict
+
+
+def read_step(path):
+    """(busy ns of tasks, span ns of tasks, {type: ns}, tasks) of one rank's timeline of one step."""
+    busy = 0
+    first, last = None, None
+    by_type = defaultdict(int)
+    tasks = 0
+    with open(path, newline="") as f:
+        rows = csv.DictReader(l for l in f if l.strip() and not l.lstrip().startswith("#"))
+        for r in rows:
+            start, end = int(r["start_ns"]), int(r["end_ns"])
+            if end <= start or int(r["thread"]) < 0:  # not run, or the exchanges after the graph
+                continue
+            busy += end - start
+            by_type[r["type"]] += end - start
+            tasks += 1
+            first = start if first is None else min(first, start)
+            last = end if last is None else max(last, end)
+    return busy, (last - first) if first is not None else 0, by_type, tasks
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("folder", help="folder with timeline_step<S>_rank<R>.csv files")
+    parser.add_argument("--per-step", action="store_true", help="print each full step's ranks")
+    args = parser.parse_args(argv)
+    pattern = re.compile(r"timeline_step(\d+)_rank(\d+)\.csv$")
+    steps = defaultdict(dict)
+    for path in glob.glob(os.path.join(args.folder, "timeline_step*_rank*.csv")):
+        m = pattern.search(path)
+        if m:
+            steps[int(m.group(1))][int(m.group(2))] = path
+    if not steps:
+        sys.exit(f"error: no timeline_step*_rank*.csv files in {args.folder}")
+    ranks = sorted({r for s in steps.values() for r in s})
+    if len(ranks) < 2:
+        sys.exit(f"error: {args.folder} holds the timelines of one rank; this compares ranks")
+    data = {s: {r: read_step(p) for r, p in files.items()} for s, files in sorted(steps.items()) if len(files) == len(ranks)}
+    most_tasks = max(sum(d[r][3] for r in ranks) for d in data.values())
+    totals = defaultdict(lambda: defaultdict(float))
+    speed = defaultdict(list)  # per task type: faster rank's time over the slower's, full steps
+    for s, d in data.items():
+        # Full steps run every task of the graph; a partial step fewer.
+        kind = "full" if sum(d[r][3] for r in ranks) >= 0.9 * most_tasks else "partial"
+        t = totals[kind]
+        busy = [d[r][0] for r in ranks]
+        t["steps"] += 1
+        for r in ranks:
+            t[f"busy rank {r}"] += d[r][0] / 1e9
+        span = max(d[r][1] for r in ranks)
+        t["span"] += span / 1e9
+        t["imbalance"] += (max(busy) - statistics.mean(busy)) / 1e9
+        t["tail"] += max(0, span - max(busy)) / 1e9
+        t[f"busiest is rank {ranks[busy.index(max(busy))]}"] += 1
+        if kind == "full":
+            for typ in d[ranks[0]][2]:
+                times = [d[r][2].get(typ, 0) for r in ranks]
+                if min(times) > 0:
+                    speed[typ].append(min(times) / max(times))
+            if args.per_step:
+                print(f"step {s}: busy " + " ".join(f"{d[r][0] / 1e6:.1f}" for r in ranks) + f" ms, span {span / 1e6:.1f} ms")
+    for kind in ("full", "partial"):
+        t = totals[kind]
+        if not t:
+            continue
+        print(f"{kind} steps: {int(t['steps'])}")
+        print("  busy per rank (s): " + ", ".join(f"{t[f'busy rank {r}']:.3f}" for r in ranks))
+        print(f"  graph span (s): {t['span']:.3f}; imbalance (busiest minus mean): {t['imbalance']:.3f}; "
+              f"tail beyond the busiest: {t['tail']:.3f}")
+        print("  steps in which each rank was the busiest: " + ", ".join(f"rank {r} {int(t[f'busiest is rank {r}'])}" for r in ranks))
+    if speed:
+        print("full steps, per task type: faster rank's time / slower rank's, median (10th percentile)")
+        for typ, v in sorted(speed.items(), key=lambda kv: -len(kv[1])):
+            v = sorted(v)
+            print(f"  {typ}: {statistics.median(v):.3f} ({v[len(v) // 10]:.3f}) over {len(v)} steps")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
