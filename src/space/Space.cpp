@@ -82,7 +82,11 @@ void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t cou
 struct Space::SortState {
   GasParticles& gas;
   CollisionlessParticles& dm;
-  std::vector<std::size_t>&order, &scratch, &dm_order, &dm_scratch;
+  // The Space's own buffers, kept from one recut to the next.
+  std::vector<std::size_t>& order;
+  std::vector<std::size_t>& scratch;
+  std::vector<std::size_t>& dm_order;
+  std::vector<std::size_t>& dm_scratch;
 };
 
 void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
