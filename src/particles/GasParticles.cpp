@@ -54,20 +54,25 @@ std::vector<char> pieces_moved(const std::vector<std::size_t>& order) {
     if (order[k] != k) moves[k / kReorderPiece] = 1;
   return moves;
 }
+
+// Either store's permute: every field through one scratch buffer (the caller's, if given).
+template <class Store>
+void permute_fields(Store& store, const std::vector<std::size_t>& order, const ForEach& for_each,
+                    std::vector<std::byte>* scratch) {
+  std::vector<std::byte> own;
+  const std::vector<char> moves = pieces_moved(order);
+  store.for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each});
+}
 }  // namespace
 
 void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
                            std::vector<std::byte>* scratch) {
-  std::vector<std::byte> own;
-  const std::vector<char> moves = pieces_moved(order);
-  for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each});
+  permute_fields(*this, order, for_each, scratch);
 }
 
 void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
                                      std::vector<std::byte>* scratch) {
-  std::vector<std::byte> own;
-  const std::vector<char> moves = pieces_moved(order);
-  for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each});
+  permute_fields(*this, order, for_each, scratch);
 }
 
 }  // namespace fountain
