@@ -16,16 +16,17 @@ particle active) and partial steps apart:
     tasks/rank_balance.py output/                 # a folder of timeline files
     tasks/rank_balance.py output/ --per-step      # also one line per full step
 
-Needs only the standard library.
+Reads the files with plot_tasks.py's reader (numpy).
 """
 import argparse
-import csv
 import glob
 import os
 import re
 import statistics
 import sys
 from collections import defaultdict
+
+from plot_tasks import read_timeline  # the same folder: the timeline files' one reader
 
 
 def read_step(path):
@@ -34,17 +35,14 @@ def read_step(path):
     first, last = None, None
     by_type = defaultdict(int)
     tasks = 0
-    with open(path, newline="") as f:
-        rows = csv.DictReader(l for l in f if l.strip() and not l.lstrip().startswith("#"))
-        for r in rows:
-            start, end = int(r["start_ns"]), int(r["end_ns"])
-            if end <= start or int(r["thread"]) < 0:  # not run, or the exchanges after the graph
-                continue
-            busy += end - start
-            by_type[r["type"]] += end - start
-            tasks += 1
-            first = start if first is None else min(first, start)
-            last = end if last is None else max(last, end)
+    for name, _rank, thread, start, end in read_timeline(path):
+        if end <= start or thread < 0:  # not run, or the exchanges after the graph
+            continue
+        busy += end - start
+        by_type[name] += end - start
+        tasks += 1
+        first = start if first is None else min(first, start)
+        last = end if last is None else max(last, end)
     return busy, (last - first) if first is not None else 0, by_type, tasks
 
 
