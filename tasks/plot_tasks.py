@@ -28,8 +28,9 @@ import numpy as np
 COLUMNS = ("type", "subtype", "category", "ci", "cj", "rank", "thread", "start_ns", "end_ns")
 
 
-def read_timeline(path):
-    """Returns a list of (task_type, rank, thread, start_ns, end_ns) read from one file."""
+def read_timeline(path, cells=False):
+    """Returns a list of (task_type, rank, thread, start_ns, end_ns) read from one file; with
+    `cells`, each tuple also ends with the task's cell (ci)."""
     rows = []
     with open(path, newline="") as f:
         lines = (l for l in f if l.strip() and not l.lstrip().startswith("#"))
@@ -48,8 +49,9 @@ def read_timeline(path):
             t = rec[col["type"]].strip()
             s = rec[col["subtype"]].strip()
             name = t + "_" + s if s else t
-            rows.append((name, int(rec[col["rank"]]), int(rec[col["thread"]]),
-                         int(rec[col["start_ns"]]), int(rec[col["end_ns"]])))
+            row = (name, int(rec[col["rank"]]), int(rec[col["thread"]]),
+                   int(rec[col["start_ns"]]), int(rec[col["end_ns"]]))
+            rows.append(row + (int(rec[col["ci"]]),) if cells else row)
     return rows
 
 

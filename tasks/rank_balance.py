@@ -11,10 +11,17 @@ particle active) and partial steps apart:
   other's messages or in the exchange after the graph;
 - the tail: the span beyond the busiest rank's busy time (latency, polling, idle starts);
 - per task type, how much faster the faster rank ran in the median step, relative to the
-  slower (the same work on both ranks, as in a symmetric problem, measures the cores).
+  slower (the same work on both ranks, as in a symmetric problem, measures the cores);
+- with --reference, the timelines of the same run on one rank (1 x 2, say): per rank and
+  task type, the time the rank took for its tasks against the time the reference took for
+  the same tasks (step, type, cell). The runs do the same work task by task (their results
+  are bitwise the same), so a ratio above 1 is the rank running slower, not a cut that gave
+  it more; where one rank's ratio stands above the other's, its core (or its cache, shared
+  with other tenants) was the slower.
 
     tasks/rank_balance.py output/                 # a folder of timeline files
     tasks/rank_balance.py output/ --per-step      # also one line per full step
+    tasks/rank_balance.py output/ --reference output_1x2/
 
 Reads the files with plot_tasks.py's reader (numpy).
 """
@@ -46,10 +53,59 @@ def read_step(path):
     return busy, (last - first) if first is not None else 0, by_type, tasks
 
 
+def task_times(path):
+    """{(type, cell): ns} of the tasks of one timeline file that ran for a cell."""
+    times = defaultdict(int)
+    for name, _rank, thread, start, end, cell in read_timeline(path, cells=True):
+        if end > start and thread >= 0 and cell >= 0:
+            times[(name, cell)] += end - start
+    return times
+
+
+def compare_with_reference(steps, ranks, folder):
+    """Prints each rank's task time per type against the reference's for the same tasks."""
+    pattern = re.compile(r"timeline_step(\d+)(?:_rank0)?\.csv$")
+    reference = {}
+    for path in glob.glob(os.path.join(folder, "timeline_step*.csv")):
+        m = pattern.search(path)
+        if m:
+            reference[int(m.group(1))] = path
+    if not reference:
+        sys.exit(f"error: no one-rank timelines (timeline_step<S>.csv) in {folder}")
+    mine = defaultdict(lambda: defaultdict(float))    # rank -> type -> s
+    theirs = defaultdict(lambda: defaultdict(float))  # rank -> type -> s, the same tasks
+    unmatched = 0
+    matched = 0
+    for s, files in sorted(steps.items()):
+        if s not in reference or len(files) != len(ranks):
+            continue
+        ref = task_times(reference[s])
+        for r in ranks:
+            for (name, cell), ns in task_times(files[r]).items():
+                if (name, cell) not in ref:
+                    unmatched += 1  # messages, or a step that differs from the reference
+                    continue
+                matched += 1
+                mine[r][name] += ns / 1e9
+                theirs[r][name] += ref[(name, cell)] / 1e9
+    if matched == 0:
+        sys.exit(f"error: no task of {folder} matches a task of the ranks (not the same run?)")
+    types = sorted({t for r in ranks for t in mine[r]}, key=lambda t: -sum(theirs[r][t] for r in ranks))
+    print(f"against {folder}, the same tasks (step, type, cell): rank's time / reference's (s)")
+    for t in types:
+        print(f"  {t}: " + "; ".join(f"rank {r} {mine[r][t]:.3f} / {theirs[r][t]:.3f} ({mine[r][t] / theirs[r][t]:.2f})"
+                                     if theirs[r][t] > 0 else f"rank {r} -" for r in ranks))
+    print("  all: " + "; ".join(f"rank {r} {sum(mine[r].values()):.3f} / {sum(theirs[r].values()):.3f} "
+                                f"({sum(mine[r].values()) / sum(theirs[r].values()):.2f})" for r in ranks))
+    print(f"  ({matched} tasks matched; {unmatched} without a counterpart, such as sends and receives)")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("folder", help="folder with timeline_step<S>_rank<R>.csv files")
     parser.add_argument("--per-step", action="store_true", help="print each full step's ranks")
+    parser.add_argument("--reference", metavar="FOLDER",
+                        help="timelines of the same run on one rank, to compare each rank's tasks with")
     args = parser.parse_args(argv)
     pattern = re.compile(r"timeline_step(\d+)_rank(\d+)\.csv$")
     steps = defaultdict(dict)
@@ -100,6 +156,8 @@ def main(argv=None):
         for typ, v in sorted(speed.items(), key=lambda kv: -len(kv[1])):
             v = sorted(v)
             print(f"  {typ}: {statistics.median(v):.3f} ({v[len(v) // 10]:.3f}) over {len(v)} steps")
+    if args.reference:
+        compare_with_reference(steps, ranks, args.reference)
     return 0
 
 
