@@ -95,8 +95,10 @@ def compare_with_reference(steps, ranks, folder):
     for t in types:
         print(f"  {t}: " + "; ".join(f"rank {r} {mine[r][t]:.3f} / {theirs[r][t]:.3f} ({mine[r][t] / theirs[r][t]:.2f})"
                                      if theirs[r][t] > 0 else f"rank {r} -" for r in ranks))
+    def ratio(a, b):
+        return f"{a / b:.2f}" if b > 0 else "-"
     print("  all: " + "; ".join(f"rank {r} {sum(mine[r].values()):.3f} / {sum(theirs[r].values()):.3f} "
-                                f"({sum(mine[r].values()) / sum(theirs[r].values()):.2f})" for r in ranks))
+                                f"({ratio(sum(mine[r].values()), sum(theirs[r].values()))})" for r in ranks))
     print(f"  ({matched} tasks matched; {unmatched} without a counterpart, such as sends and receives)")
 
 
