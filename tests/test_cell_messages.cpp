@@ -273,6 +273,30 @@ TEST_F(TwoRanks, MovedGasAfterTheGhostResultsLeavesThemToTheGhostMessage) {
   }
 }
 
+TEST_F(TwoRanks, MovedGasOfALeafWithNoneFlaggedIsEmptyAndOfAWhollyFlaggedOneComesBackWhole) {
+  MovedGasCase m(space, gas, 21);
+  const Cell& cell = space.cell(m.c);
+  std::vector<char> none(gas.size(), 0), every(gas.size(), 0);
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) every[i] = 1;
+  std::vector<char> empty, whole, scattered;
+  MessageWriter we(empty), ww(whole), ws(scattered);
+  pack_moved_gas(we, space, m.sent, m.c, none);
+  pack_moved_gas(ww, space, m.sent, m.c, every);
+  pack_moved_gas(ws, space, m.sent, m.c, m.moved);
+  EXPECT_TRUE(empty.empty());
+  EXPECT_EQ(whole.size() * m.flagged, scattered.size() * cell.count) << "the same bytes per particle either way";
+  MessageReader r(whole);
+  unpack_moved_gas(r, space, m.got, m.c, every);
+  EXPECT_TRUE(r.done());
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    const bool inside = i >= cell.first && i < cell.first + cell.count;
+    const GasParticles& expect = inside ? m.sent : m.before;
+    EXPECT_TRUE(same_bytes(m.got.v_full[i], expect.v_full[i])) << i;
+    EXPECT_TRUE(same_bytes(m.got.rho[i], expect.rho[i])) << i;
+    EXPECT_TRUE(same_bytes(m.got.ti_begin[i], expect.ti_begin[i])) << i;
+  }
+}
+
 TEST_F(TwoRanks, ScatteredParticlesComeBackWhole) {
   GasParticles sent = gas, got = gas;
   scramble(sent, 8);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <type_traits>
+#include <vector>
 
 namespace fountain {
 
@@ -105,18 +106,35 @@ void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, Collis
   dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved, dm_left_out(dm, fields)});
 }
 
+namespace {
+// Leaf c's flagged gas particles, found once for all the fields rather than once per field: in
+// a step with few active particles most drifted leaves have none, and carry nothing.
+template <class Stream>
+void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
+                      bool ghost_results_sent) {
+  const Cell& cell = space.cell(c);
+  thread_local std::vector<std::size_t> picks;
+  picks.clear();
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+    if (moved[i]) picks.push_back(i);
+  if (picks.empty()) return;
+  auto carry = [&](auto&& fields) {
+    if (ghost_results_sent) step_fields_after_ghost(gas, fields);
+    else halo_step_fields(gas, fields);
+  };
+  if (picks.size() == cell.count) carry(FieldSlices<Stream>{s, cell.first, cell.count});
+  else carry(FieldPicks<Stream>{s, picks});
+}
+}  // namespace
+
 void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
                     bool ghost_results_sent) {
-  const Cell& cell = space.cell(c);
-  if (ghost_results_sent) step_fields_after_ghost(gas, PackFields{w, cell.first, cell.count, moved});
-  else halo_step_fields(gas, PackFields{w, cell.first, cell.count, moved});
+  moved_gas_fields(w, space, gas, c, moved, ghost_results_sent);
 }
 
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
                       bool ghost_results_sent) {
-  const Cell& cell = space.cell(c);
-  if (ghost_results_sent) step_fields_after_ghost(gas, UnpackFields{r, cell.first, cell.count, moved});
-  else halo_step_fields(gas, UnpackFields{r, cell.first, cell.count, moved});
+  moved_gas_fields(r, space, gas, c, moved, ghost_results_sent);
 }
 
 void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
