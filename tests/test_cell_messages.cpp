@@ -337,7 +337,9 @@ TEST(GasParticlesPermute, MovesWhatTheOrderMovesAndKeepsTheRest) {
       g.x[i] = {static_cast<double>(i), 0.5 * static_cast<double>(i), 1.0};
       g.u[i] = 3.0 * static_cast<double>(i);
       g.time_bin[i] = static_cast<TimeBin>(i % 50);
+      g.mass[i] = 2.5;  // all alike: left as it is
     }
+    g.reservoir[15500] = 7.0;  // alike but for one particle, which the rotation moves
     return g;
   };
   std::vector<std::size_t> order(n);
@@ -355,7 +357,10 @@ TEST(GasParticlesPermute, MovesWhatTheOrderMovesAndKeepsTheRest) {
       ASSERT_EQ(g.x[k].x, static_cast<double>(was));
       ASSERT_EQ(g.u[k], 3.0 * static_cast<double>(was));
       ASSERT_EQ(g.time_bin[k], static_cast<TimeBin>(was % 50));
+      ASSERT_EQ(g.mass[k], 2.5);
+      ASSERT_EQ(g.reservoir[k], was == 15500 ? 7.0 : 0.0) << "slot " << k;
     }
+    g.for_each_field([&](auto& f) { EXPECT_EQ(f.size(), keep) << "every field, alike or not, takes the new length"; });
   }
 }
 
