@@ -27,8 +27,8 @@ MpiSession::MpiSession(int* argc, char*** argv) {
   if (!ready) {
     // A leaf's ghost results go to each rank that holds it as one message, of 5-30 KB. Open
     // MPI's shared-memory transport sends what is over 4 KB by rendezvous: the receiver copies
-    // it out of the sender's memory inside its polls, which on 250k Sedov (2 ranks x 1 thread)
-    // took ~0.7 s of polls per rank per run, half of it gone when such messages go eagerly.
+    // it out of the sender's memory inside its polls. On 250k Sedov (2 ranks x 1 thread) the
+    // polls between tasks took ~0.7 s per rank per run, 0.4-0.5 s with such messages eager.
     // A default only: a value the user set (environment or mpirun --mca) wins.
     setenv("OMPI_MCA_btl_vader_eager_limit", "32768", 0);
     int provided = MPI_THREAD_SINGLE;
