@@ -104,7 +104,7 @@ void Engine::guess_smoothing_lengths() {
 void Engine::rebuild() {
   const auto t_rebuild = std::chrono::steady_clock::now();
   // Every particle must sit at the current time before cells are recut.
-  drift_current();
+  drift_current(integration::ForceInputs::Later);
   remove_dissolved();
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
@@ -288,23 +288,23 @@ void Engine::build_graph() {
   graph_.finalize();
 }
 
-void Engine::drift_current() {
+void Engine::drift_current(integration::ForceInputs force_inputs) {
   ctx_->ti_current = ti_current_;
   const auto& leaves = space_.leaves();
   if (leaves.empty()) return;  // before the first rebuild: nothing has moved
   StepContext& ctx = *ctx_;
   if (!halo_mode_ || all_current_) {
-    executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l]); });
+    executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l], force_inputs); });
     return;
   }
   std::vector<int> held;  // not only this rank's own leaves (`mine`): every leaf it keeps current
   for (int c : leaves)
     if (held_[static_cast<std::size_t>(c)]) held.push_back(c);
-  executor_.for_each(held.size(), [&](std::size_t l) { integration::drift(ctx, held[l]); });
+  executor_.for_each(held.size(), [&](std::size_t l) { integration::drift(ctx, held[l], force_inputs); });
 }
 
 void Engine::drift_all() {
-  drift_current();
+  drift_current(integration::ForceInputs::Drift);
   gather_state();
 }
 
@@ -435,7 +435,7 @@ void Engine::run_graph(StepInfo* info) {
   const std::vector<int>& leaves = space_.leaves();
   if (ranks_) post_receives();
   auto runner = [this, &ctx, &T, sf, &leaves](const tasks::Task& t) {
-    if (t.type == T.drift) integration::drift(ctx, t.ci, true);
+    if (t.type == T.drift) integration::drift(ctx, t.ci, integration::ForceInputs::UnlessGhost);
     else if (t.type == T.density) hydro::density(ctx, t.ci);
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
     else if (t.type == T.force) hydro::force(ctx, t.ci);

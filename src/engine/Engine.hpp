@@ -16,6 +16,7 @@
 #include "starformation/StarFormationTally.hpp"
 #include "tasks/Executor.hpp"
 #include "tasks/TaskGraph.hpp"
+#include "timestep/Integration.hpp"
 #include "timestep/TimeLine.hpp"
 
 namespace fountain {
@@ -166,7 +167,8 @@ class Engine {
  private:
   enum class Phase { Density, Hydro, Full };
   void rebuild();
-  void drift_current();  // every leaf this rank keeps current, to ti_current_
+  // Every leaf this rank keeps current, to ti_current_.
+  void drift_current(integration::ForceInputs force_inputs);
   void converge_density(Phase phase);
   void wake_requested();
   void collect_radiated();  // adds the cells' radiated energy of this step to the total

@@ -44,12 +44,14 @@ double gravity_timestep(const GravityParams& g, double softening, const Vec3& a)
 
 namespace integration {
 
-void drift(StepContext& ctx, int c, bool before_ghosts) {
+void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
   const double dt = ctx.timeline.drift_factor(cell.ti_drift, ctx.ti_current);
   // The MSPH rule reads a neighbour's sound speed in the density loop, before its ghost.
-  const bool ghost_prepares = before_ghosts && !ctx.hydro.msph && cell.ti_end_min == ctx.ti_current;
+  const bool ghost_prepares =
+      force_inputs == ForceInputs::UnlessGhost && !ctx.hydro.msph && cell.ti_end_min == ctx.ti_current;
+  const bool prepare = force_inputs != ForceInputs::Later;
   double h_max = 0.0;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (dt != 0.0) {
@@ -65,7 +67,7 @@ void drift(StepContext& ctx, int c, bool before_ghosts) {
     }
     gas.rho_msph[i] = gas.rho[i];
     gas.h_msph[i] = gas.h[i];
-    if (!ghost_prepares || !ctx.is_active(i)) hydro::prepare_force(gas, i, ctx.hydro);
+    if (prepare && (!ghost_prepares || !ctx.is_active(i))) hydro::prepare_force(gas, i, ctx.hydro);
     h_max = std::max(h_max, gas.h[i]);
   }
   if (dt != 0.0) {

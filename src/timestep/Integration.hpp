@@ -4,12 +4,23 @@
 
 namespace fountain::integration {
 
+// Who prepares a drifted particle's force inputs (sound speed, pressure terms, Balsara switch).
+enum class ForceInputs {
+  // The drift, for every particle: the state is then whole (snapshots, restart files).
+  Drift,
+  // The drift of a step's graph: its ghosts prepare them anew for every active particle and,
+  // without the MSPH rule, nothing reads them before, so the drift prepares them only for the
+  // inactive particles (the force loop reads those as predicted).
+  UnlessGhost,
+  // Nobody yet: the drift before a recut. Whatever reads them in a step reads a leaf that a
+  // drift task of that step drifts first (a neighbour of an active leaf is drifted), and that
+  // task prepares them, from the same state: preparing them here too was wasted work.
+  Later,
+};
+
 // Predicts every particle of the cell to the current time: positions, velocities,
 // internal energy, h and density; freezes what the MSPH rule will read this step.
-// `before_ghosts`: the drift of a step's graph, whose ghosts then prepare the force inputs of
-// every active particle anew; without the MSPH rule nothing reads them before, so the drift
-// prepares them only for the inactive particles (the force loop reads those as predicted).
-void drift(StepContext& ctx, int c, bool before_ghosts = false);
+void drift(StepContext& ctx, int c, ForceInputs force_inputs = ForceInputs::Drift);
 
 // Closes the step of each active particle with its second half-kick.
 void kick_close(StepContext& ctx, int c);
