@@ -92,5 +92,40 @@ TEST(SpaceNeighbours, ListsHoldEveryLeafWithinReachInAPeriodicBox) { expect_list
 
 TEST(SpaceNeighbours, ListsHoldEveryLeafWithinReachInAnOpenBox) { expect_lists_match_every_pair(false); }
 
+// Across ranks each finds the lists of a share of the leaves and takes the rest from the
+// others (Engine::share_neighbour_lists): shares found apart and set must equal the whole.
+TEST(SpaceNeighbours, ListsFoundInSharesAndSetEqualThoseFoundWhole) {
+  const double box = 2.0;
+  GasParticles gas;
+  CollisionlessParticles dm;
+  fill(gas, 20000, box, 5);
+  SpaceConfig config;
+  config.periodic = true;
+  config.box_size = {box, box, box};
+  config.split_size = 64;
+  Space whole(config);
+  whole.rebuild(gas, dm);
+  const std::vector<int>& leaves = whole.leaves();
+  const std::size_t n = leaves.size(), cut = n / 3;
+  ASSERT_GT(cut, 10u);
+  Space first = whole, rest = whole;
+  first.find_neighbours({}, 0, cut);
+  rest.find_neighbours({}, cut, n + 5);  // a share running past the end stops at it
+  for (std::size_t l = 0; l < n; ++l) {
+    const int c = leaves[l];
+    // Each part found only its own share.
+    EXPECT_EQ(first.neighbours(c).empty(), l >= cut || whole.neighbours(c).empty()) << "leaf slot " << l;
+    EXPECT_EQ(rest.surroundings(c).empty(), l < cut || whole.surroundings(c).empty()) << "leaf slot " << l;
+    if (l >= cut) first.set_lists(l, rest.neighbours(c), rest.surroundings(c));
+  }
+  std::size_t listed = 0;
+  for (int c : leaves) {
+    EXPECT_EQ(first.neighbours(c), whole.neighbours(c)) << "leaf " << c;
+    EXPECT_EQ(first.surroundings(c), whole.surroundings(c)) << "leaf " << c;
+    listed += whole.neighbours(c).size();
+  }
+  EXPECT_GT(listed, n) << "leaves have neighbours";
+}
+
 }  // namespace
 }  // namespace fountain

@@ -160,15 +160,21 @@ void Engine::rebuild() {
   if (config_.gravity.enabled) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
     // beside the neighbour lists and the graph, which read only the cells, rather than in
-    // the step's tree task, where it would hold up every walk.
+    // the step's tree task, where it would hold up every walk. The lists' exchange across
+    // ranks, a collective, waits for the caller's thread.
     executor_.run_beside([this] { gravity::build_tree(*ctx_); },
                          [this, &for_each] {
-                           space_.find_neighbours(for_each);
-                           build_graph();
+                           find_neighbour_lists(for_each);
+                           if (!ranks_) build_graph();
                          });
+    if (ranks_) {
+      share_neighbour_lists();
+      build_graph();
+    }
     ctx_->tree_current = true;
   } else {
-    space_.find_neighbours(for_each);
+    find_neighbour_lists(for_each);
+    share_neighbour_lists();
     build_graph();
   }
   if (halo_mode_) {

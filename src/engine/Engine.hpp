@@ -175,6 +175,12 @@ class Engine {
   void setup_star_formation();
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   void build_graph();
+  // The leaves' neighbour lists: across ranks each finds those of its share of the leaves (by
+  // slot, not by owner: every rank needs every list) and share_neighbour_lists, a collective,
+  // hands them round; one rank finds all.
+  void find_neighbour_lists(const ForEach& for_each);
+  void share_neighbour_lists();
+  std::pair<std::size_t, std::size_t> list_share(int rank) const;
   void prepare_step(IntegerTime ti);
   std::size_t activate(Phase phase);
   void run_graph(StepInfo* info);
@@ -270,6 +276,7 @@ class Engine {
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<char> wake_buffer_;           // this rank's wake requests, packed for the others
+  std::vector<char> lists_buffer_;          // this rank's share of the neighbour lists, packed for the others
   std::vector<std::size_t> recut_order_;  // a migrating recut's permutation; its buffer is kept for the next
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
   bool halo_mode_ = false;

@@ -46,6 +46,51 @@ std::pair<std::vector<std::size_t>, std::vector<std::size_t>> Engine::owned_part
   return out;
 }
 
+std::pair<std::size_t, std::size_t> Engine::list_share(int rank) const {
+  const std::size_t n = space_.leaves().size(), ranks = static_cast<std::size_t>(ranks_->size());
+  const auto r = static_cast<std::size_t>(rank);
+  return {n * r / ranks, n * (r + 1) / ranks};
+}
+
+void Engine::find_neighbour_lists(const ForEach& for_each) {
+  // Each rank of a replicated recut would otherwise find every list on its own threads: the
+  // lists are the same on every rank, so each finds a share and they are handed round.
+  if (!ranks_) {
+    space_.find_neighbours(for_each);
+    return;
+  }
+  const auto [first, last] = list_share(rank_);
+  space_.find_neighbours(for_each, first, last);
+}
+
+void Engine::share_neighbour_lists() {
+  if (!ranks_) return;
+  const std::vector<int>& leaves = space_.leaves();
+  lists_buffer_.clear();
+  MessageWriter w(lists_buffer_);
+  const auto [first, last] = list_share(rank_);
+  for (std::size_t l = first; l < last; ++l)
+    for (const std::vector<int>* list : {&space_.neighbours(leaves[l]), &space_.surroundings(leaves[l])}) {
+      w.put(list->size());
+      w.put(list->data(), list->size());
+    }
+  const auto all = ranks_->allgather(lists_buffer_);
+  std::vector<int> neighbours, surroundings;
+  for (int r = 0; r < ranks_->size(); ++r) {
+    if (r == rank_) continue;
+    MessageReader in(all[static_cast<std::size_t>(r)]);
+    const auto [from, to] = list_share(r);
+    for (std::size_t l = from; l < to; ++l) {
+      for (std::vector<int>* list : {&neighbours, &surroundings}) {
+        list->resize(in.get<std::size_t>());
+        in.get(list->data(), list->size());
+      }
+      space_.set_lists(l, neighbours, surroundings);
+    }
+    if (!in.done()) throw std::logic_error(fmt::format("rank {} sent more neighbour lists than expected", r));
+  }
+}
+
 int Engine::rank() const { return rank_; }
 int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
 bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }

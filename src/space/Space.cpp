@@ -257,16 +257,26 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
   }
 }
 
-void Space::find_neighbours(const ForEach& for_each) {
+void Space::find_neighbours(const ForEach& for_each) { find_neighbours(for_each, 0, leaves_.size()); }
+
+void Space::set_lists(std::size_t l, std::span<const int> neighbours, std::span<const int> surroundings) {
+  neighbours_[l].assign(neighbours.begin(), neighbours.end());
+  surroundings_[l].assign(surroundings.begin(), surroundings.end());
+}
+
+void Space::find_neighbours(const ForEach& for_each, std::size_t first, std::size_t last) {
   neighbours_.assign(leaves_.size(), {});
   surroundings_.assign(leaves_.size(), {});
+  last = std::min(last, leaves_.size());
+  first = std::min(first, last);
   // A top cell's cover bounds those of its leaves, so no leaf of a top cell farther than
   // the largest top cover (or a leaf's surroundings reach) from a leaf is on its lists: only
   // the top cells within that reach are walked, in the grid's order, as the whole grid was
   // (walking every top cell for every leaf made the lists O(leaves x top cells)).
   double top_cover = 0.0;
   for (int t : top_) top_cover = std::max(top_cover, cells_[static_cast<std::size_t>(t)].r_cover);
-  const std::function<void(std::size_t)> lists_of = [this, top_cover](std::size_t l) {
+  const std::function<void(std::size_t)> lists_of = [this, top_cover, first](std::size_t k) {
+    const std::size_t l = first + k;
     const Cell& a = cells_[static_cast<std::size_t>(leaves_[l])];
     if (a.count == 0) return;
     const double reach = std::max(surroundings_reach(a), top_cover);
@@ -280,7 +290,7 @@ void Space::find_neighbours(const ForEach& for_each) {
           collect_leaves(leaves_[l], top_[static_cast<std::size_t>(t)], neighbours_[l], surroundings_[l]);
         }
   };
-  for_each_or_serial(for_each, leaves_.size(), lists_of);
+  for_each_or_serial(for_each, last - first, lists_of);
 }
 
 

@@ -3,6 +3,7 @@
 #include <array>
 #include <cstddef>
 #include <functional>
+#include <span>
 #include <vector>
 
 #include "core/ForEach.hpp"
@@ -38,6 +39,11 @@ class Space {
   void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {},
              std::vector<std::size_t>* gas_order = nullptr);
   void find_neighbours(const ForEach& for_each = {});
+  // The lists of the leaves in slots [first, last) of leaves() only; the others are left
+  // empty, for lists found elsewhere (another rank's share) to be set with set_lists.
+  void find_neighbours(const ForEach& for_each, std::size_t first, std::size_t last);
+  // Sets the lists of the leaf in slot `l` of leaves(), as find_neighbours would have found them.
+  void set_lists(std::size_t l, std::span<const int> neighbours, std::span<const int> surroundings);
 
   const std::vector<Cell>& cells() const { return cells_; }
   std::vector<Cell>& cells() { return cells_; }
