@@ -362,6 +362,19 @@ TEST(GasParticlesPermute, MovesWhatTheOrderMovesAndKeepsTheRest) {
     }
     g.for_each_field([&](auto& f) { EXPECT_EQ(f.size(), keep) << "every field, alike or not, takes the new length"; });
   }
+  // A recut's permute leaves the derived fields in place, unless the number of particles changes.
+  for (const std::size_t keep : {n, n - 100}) {
+    GasParticles g = store();
+    for (std::size_t i = 0; i < n; ++i) g.soundspeed[i] = g.rho_msph[i] = static_cast<double>(i);
+    std::vector<std::size_t> o(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep));
+    g.permute(o, {}, nullptr, GasParticles::Derived::Stay);
+    for (std::size_t k = 0; k < keep; ++k) {
+      ASSERT_EQ(g.u[k], 3.0 * static_cast<double>(o[k])) << "slot " << k;
+      const double derived = static_cast<double>(keep == n ? k : o[k]);
+      ASSERT_EQ(g.soundspeed[k], derived) << "slot " << k << " of " << keep;
+      ASSERT_EQ(g.rho_msph[k], derived) << "slot " << k << " of " << keep;
+    }
+  }
 }
 
 }  // namespace

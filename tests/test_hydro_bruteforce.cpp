@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <cstring>
 #include <random>
 
 #include "BruteForce.hpp"
@@ -211,6 +213,50 @@ TEST(CellCover, NeighboursStayCompleteBetweenRebuilds) {
   }
   EXPECT_GT(quiet_steps, 5);
   EXPECT_GT(checked, 500u);
+}
+
+// A recut leaves the derived fields (force inputs, MSPH copies, Courant bins) where they were
+// (GasParticles::Derived): nothing may read them in a step before its drift tasks and ghosts
+// work them out. Poisoned after every rebuild (NaN, and the shortest bin, which the timestep
+// limiter would act on), a run must stay bitwise the one left alone: with and without the
+// MSPH rule, whose density loop reads a neighbour's sound speed.
+TEST(DerivedFields, NothingReadsThemAfterARecutBeforeTheStepWorksThemOut) {
+  for (const bool msph : {false, true}) {
+    std::mt19937_64 rng(29);
+    GasParticles g;
+    test::add_random(g, 800, {0, 0, 0}, {1, 1, 1}, 1.0 / 1200, 0.02, 6.0, rng);
+    test::add_random(g, 400, {0.3, 0.3, 0.3}, {0.15, 0.15, 0.15}, 1.0 / 1200, 0.5, 0.0, rng);
+    RunConfig cfg = test::test_config(true, {1, 1, 1}, msph);
+    cfg.hydro.timestep_limiter = true;
+    Engine plain(cfg, g), poisoned(cfg, g);
+    int rebuilds = 0;
+    poisoned.set_after_rebuild([&] {
+      ++rebuilds;
+      GasParticles& p = poisoned.gas();
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      for (auto* f : {&p.soundspeed, &p.p_over_rho_a, &p.inv_rho_2ma, &p.balsara, &p.rho_msph, &p.h_msph})
+        std::fill(f->begin(), f->end(), nan);
+      std::fill(p.courant_bin.begin(), p.courant_bin.end(), TimeBin{0});
+    });
+    plain.initialise();
+    poisoned.initialise();
+    for (int step = 0; step < 60; ++step) {
+      plain.step();
+      poisoned.step();
+    }
+    EXPECT_GE(rebuilds, 3) << "msph " << msph;
+    plain.drift_all();
+    poisoned.drift_all();
+    const GasParticles &a = plain.gas(), &b = poisoned.gas();
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      ASSERT_EQ(std::memcmp(&a.x[i], &b.x[i], sizeof(Vec3)), 0) << "msph " << msph << ", particle " << a.id[i];
+      ASSERT_EQ(std::memcmp(&a.v_full[i], &b.v_full[i], sizeof(Vec3)), 0) << "particle " << a.id[i];
+      ASSERT_EQ(std::memcmp(&a.u_full[i], &b.u_full[i], sizeof(double)), 0) << "particle " << a.id[i];
+      ASSERT_EQ(std::memcmp(&a.rho[i], &b.rho[i], sizeof(double)), 0) << "particle " << a.id[i];
+      ASSERT_EQ(a.time_bin[i], b.time_bin[i]) << "particle " << a.id[i];
+    }
+  }
 }
 
 // The gravity tree must follow the particles to every step's positions. A step with no

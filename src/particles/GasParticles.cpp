@@ -2,6 +2,7 @@
 #include "particles/CollisionlessParticles.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <cstring>
 #include <type_traits>
@@ -35,10 +36,12 @@ struct Reorder {
   const std::vector<char>& piece_moves;
   std::vector<std::byte>& scratch;
   const ForEach& for_each;
+  std::array<const void*, 7> stay = {};  // fields left in place when the length stays
   template <class T>
   void operator()(std::vector<T>& field) const {
     static_assert(std::is_trivially_copyable_v<T>);
     const std::size_t n = order.size();
+    if (field.size() == n && std::find(stay.begin(), stay.end(), static_cast<const void*>(&field)) != stay.end()) return;
     if (field.size() == n && all_alike(field)) return;
     if (scratch.size() < n * sizeof(T)) scratch.resize(n * sizeof(T));
     std::byte* out = scratch.data();
@@ -69,16 +72,19 @@ std::vector<char> pieces_moved(const std::vector<std::size_t>& order) {
 // Either store's permute: every field through one scratch buffer (the caller's, if given).
 template <class Store>
 void permute_fields(Store& store, const std::vector<std::size_t>& order, const ForEach& for_each,
-                    std::vector<std::byte>* scratch) {
+                    std::vector<std::byte>* scratch, std::array<const void*, 7> stay = {}) {
   std::vector<std::byte> own;
   const std::vector<char> moves = pieces_moved(order);
-  store.for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each});
+  store.for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each, stay});
 }
 }  // namespace
 
 void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
-                           std::vector<std::byte>* scratch) {
-  permute_fields(*this, order, for_each, scratch);
+                           std::vector<std::byte>* scratch, Derived derived) {
+  std::array<const void*, 7> stay = {};
+  if (derived == Derived::Stay)
+    stay = {&soundspeed, &p_over_rho_a, &inv_rho_2ma, &balsara, &rho_msph, &h_msph, &courant_bin};
+  permute_fields(*this, order, for_each, scratch, stay);
 }
 
 void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,

@@ -211,7 +211,8 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
     order_leaf(gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, st.order, st.scratch);
     order_leaf(dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, st.dm_order, st.dm_scratch);
   });
-  gas.permute(st.order, for_each, &permute_scratch_);
+  // The derived fields stay: each step's drift tasks and ghosts work them out before any read.
+  gas.permute(st.order, for_each, &permute_scratch_, GasParticles::Derived::Stay);
   dm.permute(st.dm_order, for_each, &permute_scratch_);
   if (gas_order) gas_order->swap(sort_order_);
 
