@@ -108,20 +108,27 @@ struct CellUpdate {
 // between recuts in such a run: identity and masses (and the star formation fields) do not
 // change, positions change by the drift alone, and gravity's fields are unused. Listed
 // field by field so that a field added to GasParticles must be placed (a test checks).
-// They are the ghost's results (ghost_fields) and what later tasks change.
+// They are the ghost's results (ghost_fields, which a ghost message carries whole for the
+// force loops of its graph) and what later tasks change. Between graphs a holder needs none
+// of the derived fields (GasParticles::for_each_derived_field): its own drift of the leaf
+// works them out again before anything reads them.
 template <class F>
 void ghost_fields(GasParticles& g, F&& f) {
   f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
   f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
 }
 template <class F>
+void halo_ghost_fields(GasParticles& g, F&& f) {
+  f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v);
+}
+template <class F>
 void step_fields_after_ghost(GasParticles& g, F&& f) {
-  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.rho_msph); f(g.h_msph); f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool);
+  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool);
   f(g.time_bin); f(g.ti_begin); f(g.limit_bin);
 }
 template <class F>
 void halo_step_fields(GasParticles& g, F&& f) {
-  ghost_fields(g, f);
+  halo_ghost_fields(g, f);
   step_fields_after_ghost(g, f);
 }
 

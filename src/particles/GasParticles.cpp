@@ -82,8 +82,10 @@ void permute_fields(Store& store, const std::vector<std::size_t>& order, const F
 void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
                            std::vector<std::byte>* scratch, Derived derived) {
   std::array<const void*, 7> stay = {};
-  if (derived == Derived::Stay)
-    stay = {&soundspeed, &p_over_rho_a, &inv_rho_2ma, &balsara, &rho_msph, &h_msph, &courant_bin};
+  if (derived == Derived::Stay) {
+    std::size_t k = 0;
+    for_each_derived_field([&](auto& f) { stay.at(k++) = &f; });
+  }
   permute_fields(*this, order, for_each, scratch, stay);
 }
 

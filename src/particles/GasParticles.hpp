@@ -102,6 +102,15 @@ struct GasParticles {
     f(limit_bin); f(wake_bin);
   }
 
+  // The derived fields: worked out again from a particle's own state before anything reads
+  // them in a step (a leaf's drift task prepares the force inputs and the MSPH rule's frozen h
+  // and density of every particle the step reads; a ghost sets the Courant bin of each
+  // particle it finishes). A recut need not move them, nor a holder receive them.
+  template <class F>
+  void for_each_derived_field(F&& f) {
+    f(soundspeed); f(p_over_rho_a); f(inv_rho_2ma); f(balsara); f(rho_msph); f(h_msph); f(courant_bin);
+  }
+
   // Mass that gravity and inertia see: gas plus hidden stars.
   double dynamical_mass(std::size_t i) const { return mass[i] + mass_stars_hidden[i]; }
 
@@ -109,12 +118,9 @@ struct GasParticles {
   // shorter than the particle number keeps only the particles it names. Pieces of each field
   // are moved through `for_each` when given. A caller that permutes often passes `scratch`
   // to keep between calls (a fresh buffer is zero-filled and faulted in each time).
-  // The derived fields (the force inputs, the MSPH rule's frozen h and density, the Courant
-  // bin) are worked out again from a particle's own state before anything reads them in a
-  // step: a leaf's drift task prepares the first two kinds for every particle the step reads,
-  // and a ghost sets the bin of each particle it finishes. A recut may leave them in place
-  // (`Derived::Stay`): a particle's slot then holds another's stale values until then. An
-  // order that changes the number of particles moves them as every field.
+  // A recut may leave the derived fields in place (`Derived::Stay`): a particle's slot then
+  // holds another's stale values until its step works them out. An order that changes the
+  // number of particles moves them as every field.
   enum class Derived { Move, Stay };
   void permute(const std::vector<std::size_t>& order, const ForEach& for_each = {},
                std::vector<std::byte>* scratch = nullptr, Derived derived = Derived::Move);
