@@ -48,17 +48,23 @@ void fill(GasParticles& gas, std::size_t n, double box, unsigned seed) {
   }
 }
 
-void expect_lists_match_every_pair(bool periodic) {
-  const double box = 2.0;
-  GasParticles gas;
+// `fill`'s particles in a box of side `box`, cut into cells of up to 64 particles.
+Space rebuilt_space(GasParticles& gas, std::size_t n, double box, bool periodic, unsigned seed) {
   CollisionlessParticles dm;
-  fill(gas, 30000, box, periodic ? 3 : 4);
+  fill(gas, n, box, seed);
   SpaceConfig config;
   config.periodic = periodic;
   config.box_size = {box, box, box};
   config.split_size = 64;
   Space space(config);
   space.rebuild(gas, dm);
+  return space;
+}
+
+void expect_lists_match_every_pair(bool periodic) {
+  const double box = 2.0;
+  GasParticles gas;
+  const Space space = rebuilt_space(gas, 30000, box, periodic, periodic ? 3 : 4);
   const auto& grid = space.top_grid();
   ASSERT_GT(grid[0] * grid[1] * grid[2], 27) << "the grid must be wider than a leaf's reach for the test to mean anything";
   const double L = periodic ? box : 0.0;
@@ -95,16 +101,8 @@ TEST(SpaceNeighbours, ListsHoldEveryLeafWithinReachInAnOpenBox) { expect_lists_m
 // Across ranks each finds the lists of a share of the leaves and takes the rest from the
 // others (Engine::share_neighbour_lists): shares found apart and set must equal the whole.
 TEST(SpaceNeighbours, ListsFoundInSharesAndSetEqualThoseFoundWhole) {
-  const double box = 2.0;
   GasParticles gas;
-  CollisionlessParticles dm;
-  fill(gas, 20000, box, 5);
-  SpaceConfig config;
-  config.periodic = true;
-  config.box_size = {box, box, box};
-  config.split_size = 64;
-  Space whole(config);
-  whole.rebuild(gas, dm);
+  const Space whole = rebuilt_space(gas, 20000, 2.0, true, 5);
   const std::vector<int>& leaves = whole.leaves();
   const std::size_t n = leaves.size(), cut = n / 3;
   ASSERT_GT(cut, 10u);
