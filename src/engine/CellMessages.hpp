@@ -113,13 +113,13 @@ struct CellUpdate {
 // of the derived fields (GasParticles::for_each_derived_field): its own drift of the leaf
 // works them out again before anything reads them.
 template <class F>
-void ghost_fields(GasParticles& g, F&& f) {
-  f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v); f(g.courant_bin);
-  f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
-}
-template <class F>
 void halo_ghost_fields(GasParticles& g, F&& f) {
   f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v);
+}
+template <class F>
+void ghost_fields(GasParticles& g, F&& f) {
+  halo_ghost_fields(g, f);
+  f(g.courant_bin); f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
 }
 template <class F>
 void step_fields_after_ghost(GasParticles& g, F&& f) {
