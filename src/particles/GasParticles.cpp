@@ -14,6 +14,10 @@ namespace {
 // handing it to a thread, small enough that two threads share the work evenly.
 constexpr std::size_t kReorderPiece = 4096;
 
+// The fields a permute leaves in place: room for the derived ones (filled with at(), so a
+// derived field added beyond it fails loudly).
+using FieldSet = std::array<const void*, 7>;
+
 // Whether every element has the same bytes as the first: such a field is its own permutation.
 // In a run without star formation, feedback or gravity their fields are all alike (as are
 // equal masses), a quarter of the bytes a permute would otherwise move (Sedov 250k).
@@ -36,13 +40,13 @@ struct Reorder {
   const std::vector<char>& piece_moves;
   std::vector<std::byte>& scratch;
   const ForEach& for_each;
-  std::array<const void*, 7> stay = {};  // fields left in place when the length stays
+  FieldSet stay = {};  // fields left in place when the length stays
   template <class T>
   void operator()(std::vector<T>& field) const {
     static_assert(std::is_trivially_copyable_v<T>);
     const std::size_t n = order.size();
-    if (field.size() == n && std::find(stay.begin(), stay.end(), static_cast<const void*>(&field)) != stay.end()) return;
-    if (field.size() == n && all_alike(field)) return;
+    const bool stays = std::find(stay.begin(), stay.end(), static_cast<const void*>(&field)) != stay.end();
+    if (field.size() == n && (stays || all_alike(field))) return;
     if (scratch.size() < n * sizeof(T)) scratch.resize(n * sizeof(T));
     std::byte* out = scratch.data();
     const std::size_t pieces = piece_moves.size();
@@ -72,7 +76,7 @@ std::vector<char> pieces_moved(const std::vector<std::size_t>& order) {
 // Either store's permute: every field through one scratch buffer (the caller's, if given).
 template <class Store>
 void permute_fields(Store& store, const std::vector<std::size_t>& order, const ForEach& for_each,
-                    std::vector<std::byte>* scratch, std::array<const void*, 7> stay = {}) {
+                    std::vector<std::byte>* scratch, FieldSet stay = {}) {
   std::vector<std::byte> own;
   const std::vector<char> moves = pieces_moved(order);
   store.for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each, stay});
@@ -81,7 +85,7 @@ void permute_fields(Store& store, const std::vector<std::size_t>& order, const F
 
 void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
                            std::vector<std::byte>* scratch, Derived derived) {
-  std::array<const void*, 7> stay = {};
+  FieldSet stay = {};
   if (derived == Derived::Stay) {
     std::size_t k = 0;
     for_each_derived_field([&](auto& f) { stay.at(k++) = &f; });
