@@ -26,6 +26,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   double t_end = 0;
   app.add_option("problem", problem)->required()->check(CLI::IsMember({"sod", "sedov", "gresho"}));
   app.add_option("-t,--threads", threads);
+  bool pin = false;
+  app.add_flag("--pin", pin, "run.pin_threads: each task thread on a core of its own");
   app.add_option("-n,--resolution", resolution, "lattice cells per unit length");
   app.add_option("--neighbours", neighbours);
   app.add_option("--t-end", t_end);
@@ -58,6 +60,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   RunConfig c;
   c.t_end = t_end;
   c.threads = threads;
+  c.pin_threads = pin;
   c.hydro.neighbours = neighbours;
   c.hydro.viscosity_alpha = viscosity_alpha;
   c.hydro.neighbours_tolerance = neighbours_tolerance;

@@ -34,6 +34,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   std::string json_path, ic_path;
   app.add_option("-n,--particles", per_species, "particles per species");
   app.add_option("-t,--threads", threads);
+  bool pin = false;
+  app.add_flag("--pin", pin, "run.pin_threads: each task thread on a core of its own");
   app.add_option("--t-end", t_end, "simulated time to run (internal units; 977.8 Gyr each)");
   app.add_option("--softening", softening, "dark matter softening (Mpc/h)");
   app.add_option("--msph", msph);
@@ -63,6 +65,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   RunConfig c;
   c.t_end = t_end;
   c.threads = threads;
+  c.pin_threads = pin;
   c.hydro.msph = msph;
   c.space.skin = skin;
   c.integration.dt_min = 1e-12;

@@ -1,5 +1,6 @@
 #include "Executor.hpp"
 #include "TbbHandOff.hpp"
+#include "ThreadPinning.hpp"
 
 #if defined(__x86_64__)
 #include <x86intrin.h>
@@ -8,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
+#include <tbb/task_scheduler_observer.h>
 
 #include <fmt/format.h>
 
@@ -56,11 +58,38 @@ class InTask {
 };
 }  // namespace
 
-Executor::Executor(int threads)
-    : threads_(threads > 0 ? threads : tbb::info::default_concurrency()),
-      arena_(std::make_unique<tbb::task_arena>(threads_)) {}
+// Pins each thread as it enters the arena, by the slot it takes there. A worker may take
+// another slot on its next entry, so the pin is checked every time; the system call is made
+// only when the CPU changes. A thread that leaves keeps its pin, which is what a rank's
+// caller thread wants between graphs (its serial work stays on its core).
+class Executor::Pinning : public tbb::task_scheduler_observer {
+ public:
+  Pinning(tbb::task_arena& arena, std::vector<int> cpus) : tbb::task_scheduler_observer(arena), cpus_(std::move(cpus)) {
+    observe(true);
+  }
+  ~Pinning() override { observe(false); }
+  void on_scheduler_entry(bool) override {
+    const int slot = tbb::this_task_arena::current_thread_index();
+    if (slot < 0 || cpus_.empty()) return;
+    const int cpu = cpus_[static_cast<std::size_t>(slot) % cpus_.size()];
+    thread_local int pinned_to = -1;
+    if (pinned_to != cpu && pin_this_thread(cpu)) pinned_to = cpu;
+  }
 
-Executor::~Executor() = default;
+ private:
+  std::vector<int> cpus_;
+};
+
+Executor::Executor(int threads, std::vector<int> cpus)
+    : threads_(threads > 0 ? threads : tbb::info::default_concurrency()),
+      arena_(std::make_unique<tbb::task_arena>(threads_)) {
+  if (!cpus.empty()) {
+    arena_->initialize();
+    pinning_ = std::make_unique<Pinning>(*arena_, std::move(cpus));
+  }
+}
+
+Executor::~Executor() { pinning_.reset(); }
 
 void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records,
                    const std::vector<int>* only, const Gates* gates) {

@@ -23,8 +23,10 @@ struct TaskRecord {
 
 class Executor {
  public:
-  // threads <= 0: as many as TBB sees.
-  explicit Executor(int threads);
+  // threads <= 0: as many as TBB sees. With `cpus` (one per thread, ThreadPinning.hpp), the
+  // thread in slot k of the executor's arena runs on cpus[k] only: the caller's thread when it
+  // enters (and after), each worker whenever it joins.
+  explicit Executor(int threads, std::vector<int> cpus = {});
   ~Executor();
   Executor(const Executor&) = delete;
   Executor& operator=(const Executor&) = delete;
@@ -75,6 +77,8 @@ class Executor {
  private:
   int threads_;
   std::unique_ptr<tbb::task_arena> arena_;
+  class Pinning;
+  std::unique_ptr<Pinning> pinning_;
   std::vector<char> listed_;  // scratch for `only`: which tasks are listed
   std::int64_t last_wall_ns_ = 0;
   std::int64_t last_busy_ns_ = 0;

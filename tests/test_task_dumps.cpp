@@ -23,6 +23,10 @@
 #include "tasks/Executor.hpp"
 #include "tasks/TaskGraph.hpp"
 #include "tasks/TaskGraphDump.hpp"
+#include "tasks/ThreadPinning.hpp"
+
+#include <sched.h>
+#include <tbb/task_arena.h>
 
 namespace fs = std::filesystem;
 using fountain::tasks::Executor;
@@ -374,6 +378,70 @@ TEST(Executor, EveryActiveTaskRunsExactlyOnce) {
       EXPECT_EQ(rec[static_cast<std::size_t>(i)].thread >= 0, active) << "task " << i;
     }
   }
+}
+
+TEST(ThreadPinning, RanksSharingAMaskTakeTheirOwnCoresAndABoundRankKeepsItsOwn) {
+  using fountain::tasks::pinning_plan;
+  using V = std::vector<int>;
+  // mpirun --bind-to none on two cores: one thread per rank, each on its own core.
+  EXPECT_EQ(pinning_plan({0, 1}, 1, 0, 2), V({0}));
+  EXPECT_EQ(pinning_plan({0, 1}, 1, 1, 2), V({1}));
+  // One rank, two threads.
+  EXPECT_EQ(pinning_plan({0, 1}, 2, 0, 1), V({0, 1}));
+  // Two ranks of four threads on a 16-core node, and a mask with gaps.
+  EXPECT_EQ(pinning_plan({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15}, 4, 1, 2), V({4, 5, 6, 7}));
+  EXPECT_EQ(pinning_plan({2, 3, 6, 7}, 2, 1, 2), V({6, 7}));
+  // Bound by the launcher (mpirun --bind-to core): the rank's own core, whatever its place.
+  EXPECT_EQ(pinning_plan({5}, 1, 1, 2), V({5}));
+  EXPECT_EQ(pinning_plan({4, 5}, 2, 1, 2), V({4, 5}));
+  // More ranks than cores (--oversubscribe): ranks take the cores in turn.
+  EXPECT_EQ(pinning_plan({0, 1}, 1, 2, 4), V({0}));
+  EXPECT_EQ(pinning_plan({0, 1}, 1, 3, 4), V({1}));
+  // Nothing known, nothing pinned.
+  EXPECT_TRUE(pinning_plan({}, 2, 0, 1).empty());
+}
+
+TEST(Executor, PinnedThreadsRunEveryTaskOnTheCoreOfTheirSlot) {
+  const std::vector<int> allowed = fountain::tasks::allowed_cpus();
+  ASSERT_FALSE(allowed.empty());
+  cpu_set_t caller_mask;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(caller_mask), &caller_mask), 0);
+  const int threads = allowed.size() > 1 ? 2 : 1;
+  // Reversed where there are two cores, so that a thread left on its first core would fail.
+  std::vector<int> cpus(allowed.begin(), allowed.begin() + threads);
+  std::reverse(cpus.begin(), cpus.end());
+
+  TaskTypeRegistry types;
+  const int ty = types.add({"t", "", "test"});
+  TaskGraph g;
+  for (int i = 0; i < 400; ++i) g.add(ty, i, -1, -1);
+  g.finalize();
+  // Per task: its thread's slot, the CPUs that thread may run on, and the one it ran on.
+  struct Seen {
+    int slot = -2;
+    std::vector<int> allowed;
+    int cpu = -2;
+  };
+  std::vector<Seen> seen(static_cast<std::size_t>(g.size()));
+  {
+    Executor exec(threads, cpus);
+    exec.run(g, [&](const Task& t) {
+      volatile double sink = 0.0;  // long enough that both threads take tasks
+      for (int k = 0; k < 20000; ++k) sink = sink + k;
+      seen[static_cast<std::size_t>(index_of(g, t))] = {tbb::this_task_arena::current_thread_index(),
+                                                        fountain::tasks::allowed_cpus(), sched_getcpu()};
+    });
+  }
+  for (int i = 0; i < g.size(); ++i) {
+    const Seen& s = seen[static_cast<std::size_t>(i)];
+    ASSERT_GE(s.slot, 0) << "task " << i;
+    const int cpu = cpus[static_cast<std::size_t>(s.slot) % cpus.size()];
+    EXPECT_EQ(s.allowed, std::vector<int>({cpu})) << "task " << i << " in slot " << s.slot;
+    EXPECT_EQ(s.cpu, cpu) << "task " << i << " in slot " << s.slot;
+  }
+  // The caller's thread stays pinned after a run (its serial work between graphs stays put):
+  // the test gives it back its mask.
+  ASSERT_EQ(sched_setaffinity(0, sizeof(caller_mask), &caller_mask), 0);
 }
 
 TEST(Executor, ForEachInTaskVisitsEveryPieceOnceAndNoTaskRunsInsideAnother) {

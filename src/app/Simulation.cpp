@@ -81,12 +81,12 @@ void catch_sigterm() {
 }
 
 // A restart must continue the same problem: every parameter must match but the thread
-// count, the output directory (a run folder may be moved or copied and continued) and the
+// count and pinning, the output directory (a run folder may be moved or copied and continued) and the
 // task-graph and timeline dumps (diagnostics: a slow run may be resumed to look at it).
 void check_same_parameters(const io::RestartState& state, const ParameterFile& params, const std::string& path) {
   const ParameterFile saved = ParameterFile::parse(state.parameters_yaml, path + ":/Restart/Parameters");
   for (const auto& [key, value] : params.values()) {
-    if (key == "run.threads" || key == "output.directory" || key == "output.dump_task_graph" ||
+    if (key == "run.threads" || key == "run.pin_threads" || key == "output.directory" || key == "output.dump_task_graph" ||
         key == "output.dump_timeline_every")
       continue;
     const auto it = saved.values().find(key);

@@ -47,6 +47,19 @@ std::unique_ptr<RankExchange> RankExchange::world() {
   return r;
 }
 
+RankExchange::NodePlace RankExchange::node_place() {
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) return {};
+  MPI_Comm node = MPI_COMM_NULL;
+  check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &node), "MPI_Comm_split_type");
+  NodePlace place;
+  MPI_Comm_rank(node, &place.rank);
+  MPI_Comm_size(node, &place.ranks);
+  MPI_Comm_free(&node);
+  return place;
+}
+
 RankExchange::~RankExchange() {
   if (!impl_) return;
   int finalised = 0;
@@ -196,6 +209,7 @@ void RankExchange::finish() {
 #else
 struct RankExchange::Impl {};
 std::unique_ptr<RankExchange> RankExchange::world() { return nullptr; }
+RankExchange::NodePlace RankExchange::node_place() { return {}; }
 RankExchange::~RankExchange() = default;
 namespace {
 [[noreturn]] void no_mpi() { throw std::logic_error("built without MPI"); }

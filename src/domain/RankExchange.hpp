@@ -25,6 +25,12 @@ class RankExchange {
   // The ranks of this run, or null when the process runs alone (MPI not started by a
   // launcher, one rank, or a build without MPI).
   static std::unique_ptr<RankExchange> world();
+  // This process's place among the ranks on its node (shared memory): {local rank, local
+  // ranks}; {0, 1} when it runs alone.
+  struct NodePlace {
+    int rank = 0, ranks = 1;
+  };
+  static NodePlace node_place();
   ~RankExchange();
   RankExchange(const RankExchange&) = delete;
   RankExchange& operator=(const RankExchange&) = delete;

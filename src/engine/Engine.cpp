@@ -1,6 +1,7 @@
 #include "engine/Engine.hpp"
 
 #include <fmt/format.h>
+#include <tbb/info.h>
 
 #include <algorithm>
 #include <chrono>
@@ -14,6 +15,7 @@
 #include "gravity/GravityLoop.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "starformation/StarFormationLoop.hpp"
+#include "tasks/ThreadPinning.hpp"
 #include "timestep/Integration.hpp"
 
 namespace fountain {
@@ -22,10 +24,18 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
+
+// The cores of this rank's task threads, or none when threads float (the default).
+std::vector<int> pinned_cpus(const RunConfig& config) {
+  if (!config.pin_threads) return {};
+  const int threads = config.threads > 0 ? config.threads : tbb::info::default_concurrency();
+  const auto place = domain::RankExchange::node_place();
+  return tasks::pinning_plan(tasks::allowed_cpus(), threads, place.rank, place.ranks);
+}
 }  // namespace
 
 Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm)
-    : config_(config), gas_(std::move(gas)), dm_(std::move(dm)), space_(config.space), executor_(config.threads) {
+    : config_(config), gas_(std::move(gas)), dm_(std::move(dm)), space_(config.space), executor_(config.threads, pinned_cpus(config)) {
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
   if (gas_.size() == 0) throw InputError("no gas particles to simulate");

@@ -15,6 +15,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
     throw InputError(fmt::format("{}: key 'run.t_end' = {} must be later than run.t_begin = {}", p.origin(),
                                  c.t_end, c.t_begin));
   c.threads = static_cast<int>(p.integer("run.threads"));
+  c.pin_threads = p.flag("run.pin_threads");
   c.max_steps = p.integer("run.max_steps");
   c.smoothing_length_guess = p.real("initial_conditions.smoothing_length_guess");
   c.hydro = HydroParams::from(p);

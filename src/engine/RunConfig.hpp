@@ -32,6 +32,7 @@ struct RunConfig {
   double t_begin = 0.0;
   double t_end = 1.0;
   int threads = 0;
+  bool pin_threads = false;  // each task thread bound to one core (tasks/ThreadPinning.hpp)
   long long max_steps = 0;
   double smoothing_length_guess = 0.0;
   HydroParams hydro;

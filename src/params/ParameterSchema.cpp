@@ -31,6 +31,9 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("run.t_begin", "0", -inf, inf, "Simulation time of the initial conditions (internal units)."),
       real("run.t_end", std::nullopt, -inf, inf, "Time at which the run stops (internal units). Required."),
       integer("run.threads", "0", 0, 4096, "Worker threads; 0 uses every core TBB sees."),
+      boolean("run.pin_threads", "false",
+              "Bind each worker thread to one core (each MPI rank on a node to its own cores); "
+              "off, threads float between cores."),
       integer("run.max_steps", "0", 0, 1e15, "Stop after this many steps; 0 means no limit."),
       // initial conditions
       text("initial_conditions.file", std::nullopt,
