@@ -6,23 +6,26 @@
 # engine benchmark's, run to SEDOV_T_END) and the 8000-per-species rotating sphere with star
 # formation and MFB feedback on (to SPHERE_T_END). The Sedov run goes to t = 0.05, as the
 # engine issue defines that benchmark (840 steps); SEDOV_T_END=0.01 gives its first 356
-# steps, the run of the tables before 2026-11-24's twelfth session.
+# steps, the run of the tables before 2026-11-24's twelfth session. PIN=1 pins every task
+# thread to a core (--pin, run.pin_threads).
 set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 out="$root/benchmarks/results"
 mkdir -p "$out"
 mpirun_n() { mpirun --allow-run-as-root --oversubscribe --bind-to none -np "$@"; }
 layouts=${LAYOUTS:-"1x1 1x2 2x1"}
+pin=""
+if [ "${PIN:-0}" = 1 ]; then pin="--pin"; fi
 rm -f "$out"/scaling_*.json
 for repeat in $(seq "${REPEATS:-3}"); do
 for layout in $layouts; do
   ranks=${layout%x*} threads=${layout#*x}
   if echo "${PROBLEMS:-sedov sphere}" | grep -q sedov; then
-    mpirun_n "$ranks" "$root/build/benchmarks/fountain_run_bench" sedov --threads "$threads" \
+    mpirun_n "$ranks" "$root/build/benchmarks/fountain_run_bench" sedov --threads "$threads" $pin \
       --t-end "${SEDOV_T_END:-0.05}" --json "$out/scaling_sedov_${layout}_$repeat.json" > /dev/null
   fi
   if echo "${PROBLEMS:-sedov sphere}" | grep -q sphere; then
-    mpirun_n "$ranks" "$root/build/benchmarks/fountain_sphere_bench" -n 8000 --threads "$threads" \
+    mpirun_n "$ranks" "$root/build/benchmarks/fountain_sphere_bench" -n 8000 --threads "$threads" $pin \
       --star-formation --eps-cold 0.4 --eps-hot 0.4 --t-end "${SPHERE_T_END:-2e-5}" \
       --json "$out/scaling_sphere_${layout}_$repeat.json" > /dev/null
   fi
