@@ -9,7 +9,6 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
-#include <tbb/task_scheduler_observer.h>
 
 #include <fmt/format.h>
 
@@ -58,38 +57,32 @@ class InTask {
 };
 }  // namespace
 
-// Pins each thread as it enters the arena, by the slot it takes there. A worker may take
-// another slot on its next entry, so the pin is checked every time; the system call is made
-// only when the CPU changes. A thread that leaves keeps its pin, which is what a rank's
-// caller thread wants between graphs (its serial work stays on its core).
-class Executor::Pinning : public tbb::task_scheduler_observer {
- public:
-  Pinning(tbb::task_arena& arena, std::vector<int> cpus) : tbb::task_scheduler_observer(arena), cpus_(std::move(cpus)) {
-    observe(true);
-  }
-  ~Pinning() override { observe(false); }
-  void on_scheduler_entry(bool) override {
-    const int slot = tbb::this_task_arena::current_thread_index();
-    if (slot < 0 || cpus_.empty()) return;
-    const int cpu = cpus_[static_cast<std::size_t>(slot) % cpus_.size()];
-    thread_local int pinned_to = -1;
-    if (pinned_to != cpu && pin_this_thread(cpu)) pinned_to = cpu;
-  }
-
- private:
-  std::vector<int> cpus_;
-};
-
 Executor::Executor(int threads, std::vector<int> cpus)
     : threads_(threads > 0 ? threads : tbb::info::default_concurrency()),
-      arena_(std::make_unique<tbb::task_arena>(threads_)) {
-  if (!cpus.empty()) {
-    arena_->initialize();
-    pinning_ = std::make_unique<Pinning>(*arena_, std::move(cpus));
-  }
+      arena_(std::make_unique<tbb::task_arena>(threads_)),
+      cpus_(std::move(cpus)) {
+  // TBB sizes its pool of workers from the affinity of the thread that first starts it: the
+  // arena starts before the caller is pinned, or it would get no workers at all.
+  arena_->initialize();
+  // The caller's thread takes slot 0 when it enters the arena; its serial work between
+  // graphs (a rank's rebuilds and exchanges) stays on that core too.
+  if (!cpus_.empty()) pin_this_thread(cpus_[0]);
 }
 
-Executor::~Executor() { pinning_.reset(); }
+Executor::~Executor() = default;
+
+void Executor::pin_here() const {
+  // Checked as each job starts rather than by a TBB scheduler observer (whose registration
+  // TBB frees only with the arena's internals, after LeakSanitizer has looked): a worker may
+  // take another slot each time it joins, and the system call is made only when the CPU
+  // for its slot changes.
+  if (cpus_.empty()) return;
+  const int slot = tbb::this_task_arena::current_thread_index();
+  if (slot < 0) return;
+  const int cpu = cpus_[static_cast<std::size_t>(slot) % cpus_.size()];
+  thread_local int pinned_to = -1;
+  if (pinned_to != cpu && pin_this_thread(cpu)) pinned_to = cpu;
+}
 
 void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<TaskRecord>* records,
                    const std::vector<int>* only, const Gates* gates) {
@@ -224,6 +217,7 @@ void Executor::run(const TaskGraph& graph, const Runner& runner, std::vector<Tas
       }
     };
     process = [&](int first) {
+      pin_here();
       std::vector<int> ready{first};
       std::int64_t my_busy = 0;
       int my_done = 0;
@@ -319,7 +313,12 @@ void Executor::run_beside(const std::function<void()>& a, const std::function<vo
 }
 
 void Executor::for_each(std::size_t n, const std::function<void(std::size_t)>& fn) {
-  arena_->execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) { fn(k); }); });
+  arena_->execute([&] {
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) {
+      pin_here();
+      fn(k);
+    });
+  });
 }
 
 void Executor::for_each_in_task(std::size_t n, const std::function<void(std::size_t)>& fn) {
@@ -330,6 +329,7 @@ void Executor::for_each_in_task(std::size_t n, const std::function<void(std::siz
   std::atomic<std::size_t> next{0}, done{0};
   std::atomic<bool> go{false};
   std::function<void(int)> help = [&](int helper) {
+    pin_here();
     const bool helping = !InTask::here();
     const std::int64_t s = helping ? now_ticks() : 0;
     std::size_t mine = 0;

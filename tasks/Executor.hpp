@@ -24,8 +24,8 @@ struct TaskRecord {
 class Executor {
  public:
   // threads <= 0: as many as TBB sees. With `cpus` (one per thread, ThreadPinning.hpp), the
-  // thread in slot k of the executor's arena runs on cpus[k] only: the caller's thread when it
-  // enters (and after), each worker whenever it joins.
+  // thread in slot k of the executor's arena runs its work on cpus[k] only: the caller's
+  // thread from construction on (it takes slot 0), each worker from its first job.
   explicit Executor(int threads, std::vector<int> cpus = {});
   ~Executor();
   Executor(const Executor&) = delete;
@@ -77,8 +77,8 @@ class Executor {
  private:
   int threads_;
   std::unique_ptr<tbb::task_arena> arena_;
-  class Pinning;
-  std::unique_ptr<Pinning> pinning_;
+  std::vector<int> cpus_;  // by arena slot; empty: threads float
+  void pin_here() const;
   std::vector<char> listed_;  // scratch for `only`: which tasks are listed
   std::int64_t last_wall_ns_ = 0;
   std::int64_t last_busy_ns_ = 0;

@@ -423,15 +423,21 @@ TEST(Executor, PinnedThreadsRunEveryTaskOnTheCoreOfTheirSlot) {
     int cpu = -2;
   };
   std::vector<Seen> seen(static_cast<std::size_t>(g.size()));
+  // Each task waits (up to 10 s in all) until every thread has started one, so that the
+  // workers' pins are checked too, not only the caller's.
+  std::atomic<unsigned> slots_seen{0};
+  const unsigned all_slots = (1u << threads) - 1;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   {
     Executor exec(threads, cpus);
     exec.run(g, [&](const Task& t) {
-      volatile double sink = 0.0;  // long enough that both threads take tasks
-      for (int k = 0; k < 20000; ++k) sink = sink + k;
-      seen[static_cast<std::size_t>(index_of(g, t))] = {tbb::this_task_arena::current_thread_index(),
-                                                        fountain::tasks::allowed_cpus(), sched_getcpu()};
+      const int slot = tbb::this_task_arena::current_thread_index();
+      slots_seen.fetch_or(1u << slot);
+      while (slots_seen.load() != all_slots && std::chrono::steady_clock::now() < give_up) std::this_thread::yield();
+      seen[static_cast<std::size_t>(index_of(g, t))] = {slot, fountain::tasks::allowed_cpus(), sched_getcpu()};
     });
   }
+  ASSERT_EQ(slots_seen.load(), all_slots) << "not every thread ran a task";
   for (int i = 0; i < g.size(); ++i) {
     const Seen& s = seen[static_cast<std::size_t>(i)];
     ASSERT_GE(s.slot, 0) << "task " << i;
