@@ -61,12 +61,13 @@ Executor::Executor(int threads, std::vector<int> cpus)
     : threads_(threads > 0 ? threads : tbb::info::default_concurrency()),
       arena_(std::make_unique<tbb::task_arena>(threads_)),
       cpus_(std::move(cpus)) {
+  if (cpus_.empty()) return;
   // TBB sizes its pool of workers from the affinity of the thread that first starts it: the
   // arena starts before the caller is pinned, or it would get no workers at all.
   arena_->initialize();
   // The caller's thread takes slot 0 when it enters the arena; its serial work between
   // graphs (a rank's rebuilds and exchanges) stays on that core too.
-  if (!cpus_.empty()) pin_this_thread(cpus_[0]);
+  pin_this_thread(cpus_[0]);
 }
 
 Executor::~Executor() = default;

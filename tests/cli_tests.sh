@@ -364,11 +364,13 @@ with h5py.File('out/restart.hdf5', 'a') as f: f['Gas/u'][2] = 1.2345"
     }
     expect_error_restart "corrupted"
     # A run folder moved elsewhere continues from its restart file (output.directory may
-    # change), and may turn on timeline dumps (diagnostics only).
+    # change), and may turn on timeline dumps (diagnostics only) and pinned threads.
     "$bin" run params.yml -q > /dev/null 2>&1 || fail "run"
     cp -r out moved
-    sed 's/^  directory: out$/  directory: moved\n  dump_timeline_every: 1/' params.yml > moved.yml
+    sed 's/^  directory: out$/  directory: moved\n  dump_timeline_every: 1/; s/^run:$/run:\n  pin_threads: true/' \
+      params.yml > moved.yml
     grep -q "dump_timeline_every: 1" moved.yml || fail "test set-up: no timeline key"
+    grep -q "pin_threads: true" moved.yml || fail "test set-up: no pinning key"
     "$bin" run moved.yml -q --restart > moved.txt 2>&1 || { cat moved.txt; fail "restart of a moved run folder"; }
     ls moved/timeline_step*.csv > /dev/null || fail "no timeline after the restart"
     # A restart file of another problem (other parameters) is refused too.

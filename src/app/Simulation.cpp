@@ -2,11 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <string_view>
 
 #include <pthread.h>
 #include <signal.h>
@@ -80,15 +83,16 @@ void catch_sigterm() {
   pthread_sigmask(SIG_UNBLOCK, &term, nullptr);
 }
 
-// A restart must continue the same problem: every parameter must match but the thread
-// count and pinning, the output directory (a run folder may be moved or copied and continued) and the
-// task-graph and timeline dumps (diagnostics: a slow run may be resumed to look at it).
+// A restart must continue the same problem: every parameter must match but the threads
+// and their pinning, the output directory (a run folder may be moved or copied and
+// continued) and the task-graph and timeline dumps (diagnostics: a slow run may be resumed
+// to look at it).
 void check_same_parameters(const io::RestartState& state, const ParameterFile& params, const std::string& path) {
   const ParameterFile saved = ParameterFile::parse(state.parameters_yaml, path + ":/Restart/Parameters");
+  constexpr std::array<std::string_view, 5> may_change = {"run.threads", "run.pin_threads", "output.directory",
+                                                          "output.dump_task_graph", "output.dump_timeline_every"};
   for (const auto& [key, value] : params.values()) {
-    if (key == "run.threads" || key == "run.pin_threads" || key == "output.directory" || key == "output.dump_task_graph" ||
-        key == "output.dump_timeline_every")
-      continue;
+    if (std::find(may_change.begin(), may_change.end(), key) != may_change.end()) continue;
     const auto it = saved.values().find(key);
     if (it == saved.values().end() || it->second != value)
       throw InputError(fmt::format("{}: restart file was written with {} = {}, but {} says {}", path, key,

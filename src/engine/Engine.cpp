@@ -35,7 +35,11 @@ std::vector<int> pinned_cpus(const RunConfig& config) {
 }  // namespace
 
 Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm)
-    : config_(config), gas_(std::move(gas)), dm_(std::move(dm)), space_(config.space), executor_(config.threads, pinned_cpus(config)) {
+    : config_(config),
+      gas_(std::move(gas)),
+      dm_(std::move(dm)),
+      space_(config.space),
+      executor_(config.threads, pinned_cpus(config)) {
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
   if (gas_.size() == 0) throw InputError("no gas particles to simulate");
