@@ -6,6 +6,7 @@
 #include <x86intrin.h>
 #endif
 #include <tbb/info.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
@@ -315,9 +316,10 @@ void Executor::run_beside(const std::function<void()>& a, const std::function<vo
 
 void Executor::for_each(std::size_t n, const std::function<void(std::size_t)>& fn) {
   arena_->execute([&] {
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t k) {
+    // Pinned once per piece of the range, not once per index.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& r) {
       pin_here();
-      fn(k);
+      for (std::size_t k = r.begin(); k != r.end(); ++k) fn(k);
     });
   });
 }
