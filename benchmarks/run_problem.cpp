@@ -40,6 +40,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--skin", skin, "space.rebuild_skin");
   double repartition_imbalance = RunConfig{}.repartition_imbalance;
   app.add_option("--repartition-imbalance", repartition_imbalance, "domain.repartition_imbalance (across ranks)");
+  long long repartition_min_steps = RunConfig{}.repartition_min_steps;
+  app.add_option("--repartition-min-steps", repartition_min_steps, "domain.repartition_min_steps (across ranks)");
   app.add_option("--json", json_path);
   CLI11_PARSE(app, argc, argv);
 
@@ -73,6 +75,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.space.split_size = split;
   c.space.skin = skin;
   c.repartition_imbalance = repartition_imbalance;
+  c.repartition_min_steps = repartition_min_steps;
   const std::size_t n = ic.gas.size();
 
   const auto t0 = std::chrono::steady_clock::now();

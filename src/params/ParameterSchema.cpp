@@ -118,7 +118,9 @@ const std::vector<ParamSpec>& parameter_schema() {
            "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),
       // domain decomposition (MPI)
       real("domain.repartition_imbalance", "0.1", 0, inf,
-           "Across MPI ranks: when the cells are recut, their owners are chosen anew if, in the work measured since they were last chosen, the most loaded rank's exceeds the mean by more than this fraction (0: at every recut)."),
+           "Across MPI ranks: when the cells are recut, their owners are chosen anew if, in the work measured since they were last chosen, the most loaded rank's exceeds the mean by more than this fraction (0: at every recut that domain.repartition_min_steps allows)."),
+      integer("domain.repartition_min_steps", "100", 0, 1e15,
+              "Across MPI ranks: owners chosen from measured work are judged again only once this many steps have been measured since (0: at every recut). Owners chosen from particle counts, at the start, are judged at the first recut."),
   };
   return schema;
 }
