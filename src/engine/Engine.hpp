@@ -271,8 +271,7 @@ class Engine {
   bool ghost_exchange_ = false;             // this run of the graph sends ghost results (send_to_, need_recv_ hold)
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
   std::vector<std::pair<Vec3, double>> work_since_cut_;  // (leaf centre, task ns) measured since the cut, before this interval
-  bool cut_from_work_ = false;  // the cut was made from measured work, not particle counts
-  long long cut_step_ = 0;      // the step count when it was made
+  long long cut_step_ = 0;  // the step count when the cut was made
   double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
   std::pair<std::int64_t, std::int64_t> last_exchange_ns_{0, 0};
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph

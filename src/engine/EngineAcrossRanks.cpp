@@ -180,14 +180,15 @@ void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured)
       own[l] = static_cast<int>(std::upper_bound(cut_keys_.begin(), cut_keys_.end(), key[l]) - cut_keys_.begin());
     return own;
   };
-  // A cut made from measured work is judged only once it has stood for a span of steps: right
-  // after it the work measured since covers a few steps, and a core slowed by the host for a
-  // while made the cut follow it (Sedov 250k, 2 ranks: 12-14 cuts, each with a migration).
-  // A cut from particle counts may be far off the work, so it is judged at once.
+  // A cut is judged only once it has stood for a span of steps. Judged on the few steps since
+  // the last recut, a core slowed by the host for a while made the cut follow it (Sedov 250k,
+  // 2 ranks: 12-14 cuts, each with a migration), and a cut made from the first steps' work
+  // left the ranks 12% apart for the rest of the run, where the symmetric cut from particle
+  // counts was even (docs/performance.md, sixteenth session).
   std::vector<int> leaf_owner;
   if (cut_keys_.size() == static_cast<std::size_t>(n - 1)) {
     leaf_owner = owners_from_cuts();
-    const bool judged = !cut_from_work_ || steps_ - cut_step_ >= config_.repartition_min_steps;
+    const bool judged = steps_ - cut_step_ >= config_.repartition_min_steps;
     if (judged && domain::needs_repartition(domain::imbalance(work, leaf_owner, n), config_.repartition_imbalance))
       leaf_owner.clear();
   }
@@ -200,7 +201,6 @@ void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured)
         cut_keys_[static_cast<std::size_t>(r - 1)] = std::min(cut_keys_[static_cast<std::size_t>(r - 1)], key[static_cast<std::size_t>(l)]);
     leaf_owner = owners_from_cuts();
     ++partitions_;
-    cut_from_work_ = !measured.empty();
     cut_step_ = steps_;
   } else if (!measured.empty()) {
     work_since_cut_.clear();

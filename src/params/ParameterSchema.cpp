@@ -120,7 +120,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("domain.repartition_imbalance", "0.1", 0, inf,
            "Across MPI ranks: when the cells are recut, their owners are chosen anew if, in the work measured since they were last chosen, the most loaded rank's exceeds the mean by more than this fraction (0: at every recut that domain.repartition_min_steps allows)."),
       integer("domain.repartition_min_steps", "100", 0, 1e15,
-              "Across MPI ranks: owners chosen from measured work are judged again only once this many steps have been measured since (0: at every recut). Owners chosen from particle counts, at the start, are judged at the first recut."),
+              "Across MPI ranks: owners, once chosen, are judged only after this many steps (0: at every recut), so that the imbalance is measured over enough steps to be more than noise."),
   };
   return schema;
 }
