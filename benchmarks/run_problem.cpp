@@ -1,12 +1,13 @@
 // Whole-run benchmark of a standard hydro problem: wall time, step costs, parallel share,
 // peak memory and accuracy, written as JSON. Usage: fountain_run_bench sod|sedov|gresho
-// [--threads N] [--resolution N] [--json FILE]
+// [--threads N] [--resolution N] [--json FILE] [--step-log FILE]
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
 
 #include <chrono>
 #include <fstream>
+#include <stdexcept>
 
 #include "analysis/HydroReference.hpp"
 #include "engine/Engine.hpp"
@@ -43,6 +44,9 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   long long repartition_min_steps = RunConfig{}.repartition_min_steps;
   app.add_option("--repartition-min-steps", repartition_min_steps, "domain.repartition_min_steps (across ranks)");
   app.add_option("--json", json_path);
+  std::string step_log_path;
+  app.add_option("--step-log", step_log_path,
+                 "CSV of every step's active particles, graph wall time and task time (each rank: FILE.rank<R>)");
   CLI11_PARSE(app, argc, argv);
 
   const double gamma = 5.0 / 3.0;
@@ -86,8 +90,20 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   const auto t_steps = std::chrono::steady_clock::now();
   double full_step_s = 0, tasks_wall = 0, tasks_busy = 0, updates = 0;
   long long full_steps = 0;
+  // Per step, so that two processes' (or two ranks') speeds can be set side by side step by
+  // step (benchmarks/core_noise.py).
+  std::ofstream step_log;
+  if (!step_log_path.empty()) {
+    const std::string path = e.ranks() > 1 ? fmt::format("{}.rank{}", step_log_path, e.rank()) : step_log_path;
+    step_log.open(path);
+    if (!step_log) throw std::runtime_error(fmt::format("cannot write the step log {}", path));
+    step_log << "step,active,rebuilt,step_wall_s,tasks_wall_s,tasks_busy_s\n";
+  }
   while (!e.finished()) {
     const StepInfo s = e.step();
+    if (step_log)
+      step_log << fmt::format("{},{},{},{:.7f},{:.7f},{:.7f}\n", s.step, s.active, s.rebuilt ? 1 : 0, s.wall_s,
+                              s.tasks_wall_s, s.tasks_busy_s);
     updates += static_cast<double>(s.active);
     tasks_wall += s.tasks_wall_s;
     tasks_busy += s.tasks_busy_s;
