@@ -42,7 +42,7 @@ struct RunConfig {
   IntegrationParams integration;
   SpaceConfig space;
   double repartition_imbalance = 0.1;  // across ranks: recut owners above this imbalance
-  long long repartition_min_steps = 100;  // steps measured before a measured cut is judged
+  long long repartition_min_steps = 100;  // steps a cut stands before its imbalance is judged
   Units units;
   OutputConfig output;
   RestartConfig restart;
