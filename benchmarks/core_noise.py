@@ -41,16 +41,25 @@ def main():
     ratio = [x / y for x, y in zip(ta, tb)]
     mean_ratio = sum(ratio) / len(ratio)
     sd = math.sqrt(sum((r - mean_ratio) ** 2 for r in ratio) / (len(ratio) - 1))
+    # Whether one side stays the slower for a while (a cut or a rebalance could then follow
+    # it) or changes step to step (nothing but shared work can): the correlation of the
+    # ratio's log from one full step to the next.
+    lr = [math.log(r) for r in ratio]
+    m = sum(lr) / len(lr)
+    var = sum((x - m) ** 2 for x in lr)
+    lag1 = sum((lr[k] - m) * (lr[k + 1] - m) for k in range(len(lr) - 1)) / var if var > 0 else 0.0
     loss = sum(max(x, y) for x, y in zip(ta, tb)) / sum(0.5 * (x + y) for x, y in zip(ta, tb)) - 1
     out = {
         "label": args.label, "full_steps": len(steps), "particles": full,
         "task_s_a": round(sum(ta), 3), "task_s_b": round(sum(tb), 3),
         "step_ratio_mean": round(mean_ratio, 4), "step_ratio_sd": round(sd, 4),
         "step_ratio_min": round(min(ratio), 4), "step_ratio_max": round(max(ratio), 4),
+        "step_ratio_lag1_correlation": round(lag1, 3),
         "loss_waiting_for_slower_side": round(loss, 4),
     }
     print(f"{len(steps)} full steps of {full} particles: task time {out['task_s_a']} s against {out['task_s_b']} s; "
-          f"per-step ratio {mean_ratio:.3f} +- {sd:.3f} ({min(ratio):.3f}-{max(ratio):.3f}); "
+          f"per-step ratio {mean_ratio:.3f} +- {sd:.3f} ({min(ratio):.3f}-{max(ratio):.3f}), "
+          f"correlated {lag1:.2f} with the next full step's; "
           f"waiting for the slower side each step would cost {100 * loss:.1f}% of these steps")
     if args.json:
         with open(args.json, "w") as f:

@@ -55,6 +55,18 @@ def main(folder):
                 f"({r.get('ghost_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB; "
                 f"{r.get('recut_bytes_sent_per_step_rank0', 0) / 1e6:.2f} MB) | "
                 f"{r['messages_sent_per_step_rank0']:.0f} | {r['waiting_share_rank0']:.0%} |")
+    # The host's noise floor, when strong_scaling.sh measured it with the table.
+    for name in ("core_noise.json", "core_noise_2x1_ranks.json"):
+        path = os.path.join(folder, name)
+        if os.path.exists(path):
+            with open(path) as f:
+                n = json.load(f)
+            lines.append("")
+            lines.append(f"{name}: {n['label']}: per full step {n['step_ratio_mean']:.2f} +- {n['step_ratio_sd']:.2f} "
+                         f"({n['step_ratio_min']:.2f}-{n['step_ratio_max']:.2f})"
+                         + (f", correlated {n['step_ratio_lag1_correlation']:.2f} with the next"
+                            if "step_ratio_lag1_correlation" in n else "")
+                         + f"; waiting for the slower side costs {100 * n['loss_waiting_for_slower_side']:.1f}% of the full steps")
     print("\n".join(lines))
 
 

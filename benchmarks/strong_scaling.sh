@@ -8,6 +8,10 @@
 # engine issue defines that benchmark (840 steps); SEDOV_T_END=0.01 gives its first 356
 # steps, the run of the tables before 2026-11-24's twelfth session. PIN=1 pins every task
 # thread to a core (--pin, run.pin_threads).
+# The host's own step-to-step difference between its cores goes with the table, since a 2 x 1
+# run pays it and a 1 x 2 run does not: the Sedov 2 x 1 runs log their steps, and the last
+# one's two ranks are set side by side (core_noise_2x1_ranks.json), then two independent
+# one-thread runs are (benchmarks/core_noise.sh; core_noise.json). NOISE=0 leaves both out.
 set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 out="$root/benchmarks/results"
@@ -17,12 +21,15 @@ layouts=${LAYOUTS:-"1x1 1x2 2x1"}
 pin=""
 if [ "${PIN:-0}" = 1 ]; then pin="--pin"; fi
 rm -f "$out"/scaling_*.json
+logs=$(mktemp -d)
+trap 'rm -rf "$logs"' EXIT
 for repeat in $(seq "${REPEATS:-3}"); do
 for layout in $layouts; do
   ranks=${layout%x*} threads=${layout#*x}
   if echo "${PROBLEMS:-sedov sphere}" | grep -q sedov; then
     mpirun_n "$ranks" "$root/build/benchmarks/fountain_run_bench" sedov --threads "$threads" $pin \
-      --t-end "${SEDOV_T_END:-0.05}" --json "$out/scaling_sedov_${layout}_$repeat.json" > /dev/null
+      --t-end "${SEDOV_T_END:-0.05}" --json "$out/scaling_sedov_${layout}_$repeat.json" \
+      --step-log "$logs/sedov_$layout.csv" > /dev/null
   fi
   if echo "${PROBLEMS:-sedov sphere}" | grep -q sphere; then
     mpirun_n "$ranks" "$root/build/benchmarks/fountain_sphere_bench" -n 8000 --threads "$threads" $pin \
@@ -31,4 +38,9 @@ for layout in $layouts; do
   fi
 done
 done
+if [ "${NOISE:-1}" != 0 ] && [ -f "$logs/sedov_2x1.csv.rank1" ]; then
+  "${PYTHON:-/usr/bin/python3}" "$root/benchmarks/core_noise.py" "$logs/sedov_2x1.csv.rank0" "$logs/sedov_2x1.csv.rank1" \
+    --label "the two ranks of the last Sedov 2 x 1 run" --json "$out/core_noise_2x1_ranks.json"
+  SEDOV_T_END=${SEDOV_T_END:-0.05} sh "$root/benchmarks/core_noise.sh"
+fi
 "${PYTHON:-/usr/bin/python3}" "$root/benchmarks/scaling_report.py" "$out"
