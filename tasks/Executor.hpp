@@ -44,6 +44,9 @@ class Executor {
   struct Gates {
     std::vector<int> tasks;
     std::function<void(std::span<const int> waiting, std::vector<int>& opened)> poll;
+    // Per task (empty: none): what to run first when a thread has a choice, here the tasks
+    // that lead to sends, so that other ranks get their messages early.
+    std::vector<char> urgent;
   };
 
   // Runs every active task of `graph` once its predecessors have finished; inactive tasks

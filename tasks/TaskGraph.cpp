@@ -28,6 +28,8 @@ void TaskGraph::depends(int before, int after) {
 
 void TaskGraph::finalize() {
   if (finalized_) return;
+  wait_offsets_.clear();
+  wait_sources_.clear();
   // Chain the writers of each resource in insertion order.
   int resources = 0;
   for (const Task& t : tasks_) resources = std::max(resources, t.writes + 1);
@@ -70,5 +72,33 @@ void TaskGraph::finalize() {
 }
 
 std::size_t TaskGraph::num_dependencies() const { return unlock_targets_.size(); }
+
+std::vector<char> TaskGraph::ancestors(std::span<const int> targets, const std::vector<char>& listed) {
+  if (!finalized_) throw std::logic_error("TaskGraph::ancestors before finalize");
+  const std::size_t n = tasks_.size();
+  if (wait_offsets_.size() != n + 1) {
+    wait_offsets_.assign(n + 1, 0);
+    for (int u : unlock_targets_) ++wait_offsets_[static_cast<std::size_t>(u) + 1];
+    for (std::size_t t = 0; t < n; ++t) wait_offsets_[t + 1] += wait_offsets_[t];
+    wait_sources_.resize(unlock_targets_.size());
+    std::vector<std::size_t> fill(wait_offsets_.begin(), wait_offsets_.end() - 1);
+    for (std::size_t t = 0; t < n; ++t)
+      for (int u : unlocks(static_cast<int>(t))) wait_sources_[fill[static_cast<std::size_t>(u)]++] = static_cast<int>(t);
+  }
+  std::vector<char> marked(n, 0);
+  std::vector<int> stack(targets.begin(), targets.end());
+  for (int t : targets) marked[static_cast<std::size_t>(t)] = 1;
+  while (!stack.empty()) {
+    const std::size_t t = static_cast<std::size_t>(stack.back());
+    stack.pop_back();
+    for (std::size_t k = wait_offsets_[t]; k < wait_offsets_[t + 1]; ++k) {
+      const auto p = static_cast<std::size_t>(wait_sources_[k]);
+      if (marked[p] || !listed[p]) continue;
+      marked[p] = 1;
+      stack.push_back(static_cast<int>(p));
+    }
+  }
+  return marked;
+}
 
 }  // namespace fountain::tasks

@@ -72,11 +72,18 @@ class TaskGraph {
   }
   std::size_t num_dependencies() const;
 
+  // Marks (1) the tasks in `targets` and every task that leads to one of them through tasks
+  // marked in `listed` (indexed by task), that is what must finish before they can start.
+  // The predecessor lists are built on the first call after finalize.
+  std::vector<char> ancestors(std::span<const int> targets, const std::vector<char>& listed);
+
  private:
   std::vector<Task> tasks_;
   std::vector<std::pair<int, int>> edges_;   // (before, after) until finalize
   std::vector<std::size_t> unlock_offsets_;  // CSR: unlocks of t are targets[offsets[t], offsets[t+1])
   std::vector<int> unlock_targets_;
+  std::vector<std::size_t> wait_offsets_;  // CSR of the predecessors, built by ancestors()
+  std::vector<int> wait_sources_;
   bool finalized_ = false;
 };
 

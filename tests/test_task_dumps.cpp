@@ -652,6 +652,76 @@ TEST(Executor, OnlyListedTasksRunInDependencyOrder) {
   EXPECT_EQ(order, (std::vector<int>{0, 1, 3}));
 }
 
+// The ancestors of a set of tasks (what the engine runs first so that sends go early): every
+// listed task that leads to a target, through listed tasks only, and nothing else.
+TEST(TaskGraph, AncestorsFollowListedTasksBackFromTheTargets) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"step", "", "test"});
+  TaskGraph g;
+  std::vector<int> t;
+  for (int k = 0; k < 8; ++k) t.push_back(g.add(ty, k));
+  // 0 -> 1 -> 3 <- 2; 4 alone; 5 (unlisted) -> 6 -> 3; 7 -> 5; 3 -> ... nothing.
+  g.depends(t[0], t[1]);
+  g.depends(t[1], t[3]);
+  g.depends(t[2], t[3]);
+  g.depends(t[5], t[6]);
+  g.depends(t[6], t[3]);
+  g.depends(t[7], t[5]);
+  EXPECT_THROW(g.ancestors(std::vector<int>{t[3]}, std::vector<char>(8, 1)), std::logic_error);
+  g.finalize();
+  std::vector<char> listed(8, 1);
+  listed[5] = 0;
+  const std::vector<char> marked = g.ancestors(std::vector<int>{t[3]}, listed);
+  EXPECT_EQ(marked, (std::vector<char>{1, 1, 1, 1, 0, 0, 1, 0}));
+  // With every task listed, 5 and 7 lead to 3 as well; a second call reuses the lists.
+  EXPECT_EQ(g.ancestors(std::vector<int>{t[3]}, std::vector<char>(8, 1)), (std::vector<char>{1, 1, 1, 1, 0, 1, 1, 1}));
+  EXPECT_EQ(g.ancestors(std::vector<int>{t[4]}, std::vector<char>(8, 1)), (std::vector<char>{0, 0, 0, 0, 1, 0, 0, 0}));
+}
+
+// Urgent tasks (those whose results other ranks wait for) run first: a lone thread runs every
+// urgent task as soon as it is ready, before any other ready task, and the order never breaks
+// a dependency; with two threads every task still runs once, in dependency order.
+TEST(Executor, UrgentTasksRunFirstOnALoneThread) {
+  TaskTypeRegistry types;
+  const int ty = types.add({"step", "", "test"});
+  TaskGraph g;
+  std::vector<int> t;
+  for (int k = 0; k < 12; ++k) t.push_back(g.add(ty, k));
+  // Roots 0-7; 5 -> 8 -> 9 and 2 -> 10 -> 11; urgent: 2, 5, 8, 10.
+  g.depends(t[5], t[8]);
+  g.depends(t[8], t[9]);
+  g.depends(t[2], t[10]);
+  g.depends(t[10], t[11]);
+  g.finalize();
+  Executor::Gates gates;
+  gates.poll = [](std::span<const int>, std::vector<int>&) {};
+  gates.urgent.assign(12, 0);
+  for (int u : {2, 5, 8, 10}) gates.urgent[static_cast<std::size_t>(u)] = 1;
+  for (int threads : {1, 2}) {
+    std::mutex m;
+    std::vector<int> order;
+    Executor exec(threads);
+    exec.run(
+        g,
+        [&](const Task& task) {
+          const std::lock_guard<std::mutex> lock(m);
+          order.push_back(task.ci);
+        },
+        nullptr, nullptr, &gates);
+    ASSERT_EQ(order.size(), 12u) << threads << " threads";
+    std::vector<int> place(12, -1);
+    for (std::size_t k = 0; k < order.size(); ++k) place[static_cast<std::size_t>(order[k])] = static_cast<int>(k);
+    for (int k = 0; k < 12; ++k) EXPECT_GE(place[static_cast<std::size_t>(k)], 0) << "task " << k << " never ran";
+    for (auto [a, b] : std::vector<std::pair<int, int>>{{5, 8}, {8, 9}, {2, 10}, {10, 11}})
+      EXPECT_LT(place[static_cast<std::size_t>(a)], place[static_cast<std::size_t>(b)]) << threads << " threads";
+    if (threads == 1) {
+      std::vector<int> first(order.begin(), order.begin() + 4);
+      std::sort(first.begin(), first.end());
+      EXPECT_EQ(first, (std::vector<int>{2, 5, 8, 10})) << "run order: " << ::testing::PrintToString(order);
+    }
+  }
+}
+
 // Gates (messages from other ranks): a gated task runs once its gate is named by the poll
 // and its predecessors are done, never earlier, with no more than `threads` tasks running at
 // once (the threads that poll are the ones that compute). Half the gates are opened by tasks of the

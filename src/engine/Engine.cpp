@@ -503,9 +503,18 @@ void Engine::run_graph(StepInfo* info) {
     for (int t : step_tasks_)
       if (graph_.task(t).type == types_.recv) gates.tasks.push_back(t);
     gates.poll = [this](std::span<const int> waiting, std::vector<int>& opened) { poll_receives(waiting, opened); };
+    // What other ranks wait for goes first: the sends and what leads to them (the drifts,
+    // density loops and ghosts of the cells that feed other ranks).
+    std::vector<int> sends;
+    listed_.assign(static_cast<std::size_t>(graph_.size()), 0);
+    for (int t : step_tasks_) {
+      listed_[static_cast<std::size_t>(t)] = 1;
+      if (graph_.task(t).type == types_.send) sends.push_back(t);
+    }
+    if (!sends.empty()) gates.urgent = graph_.ancestors(sends, listed_);
   }
   const auto t_graph = std::chrono::steady_clock::now();
-  executor_.run(graph_, runner, records, &step_tasks_, gates.tasks.empty() ? nullptr : &gates);
+  executor_.run(graph_, runner, records, &step_tasks_, gates.tasks.empty() && gates.urgent.empty() ? nullptr : &gates);
   graph_s_ += seconds_since(t_graph);
   records_stale_ = false;
   if (ranks_) {

@@ -242,6 +242,7 @@ class Engine {
   std::vector<char> cell_active_;
   std::vector<double> moved_;  // per cell: how far its particles moved since the rebuild (prepare_step)
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
+  std::vector<char> listed_;  // step_tasks_ as flags per task (the urgent tasks' search)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
   int gravity_tree_task_ = -1;
   std::vector<int> refit_tasks_;
