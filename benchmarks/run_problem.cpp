@@ -93,15 +93,16 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   // Per step, so that two processes' (or two ranks') speeds can be set side by side step by
   // step (benchmarks/core_noise.py).
   std::ofstream step_log;
+  const std::string step_log_file =
+      e.ranks() > 1 ? fmt::format("{}.rank{}", step_log_path, e.rank()) : step_log_path;
   if (!step_log_path.empty()) {
-    const std::string path = e.ranks() > 1 ? fmt::format("{}.rank{}", step_log_path, e.rank()) : step_log_path;
-    step_log.open(path);
-    if (!step_log) throw std::runtime_error(fmt::format("cannot write the step log {}", path));
+    step_log.open(step_log_file);
+    if (!step_log) throw std::runtime_error(fmt::format("cannot write the step log {}", step_log_file));
     step_log << "step,active,rebuilt,step_wall_s,tasks_wall_s,tasks_busy_s\n";
   }
   while (!e.finished()) {
     const StepInfo s = e.step();
-    if (step_log)
+    if (step_log.is_open())
       step_log << fmt::format("{},{},{},{:.7f},{:.7f},{:.7f}\n", s.step, s.active, s.rebuilt ? 1 : 0, s.wall_s,
                               s.tasks_wall_s, s.tasks_busy_s);
     updates += static_cast<double>(s.active);
@@ -112,6 +113,9 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
       ++full_steps;
     }
   }
+  // A log cut short by a full disk would read as a shorter run.
+  if (step_log.is_open() && !step_log.flush())
+    throw std::runtime_error(fmt::format("could not write the whole step log {}", step_log_file));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const double steps_wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_steps).count();
   const std::string ranks = bench::rank_fields(e, counters, e.steps() - steps_before, steps_wall, tasks_busy);
