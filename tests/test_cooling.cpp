@@ -18,7 +18,7 @@ constexpr double m_p = 1.67262192e-24;
 
 TEST(CoolingTable, ReproducesTabulatedPeaks) {
   const cooling::CoolingTable solar(kTables, "0");
-  EXPECT_NEAR(solar.log_lambda_norm(5.35), -20.96, 1e-9);  // REFERENCES.md: solar peak
+  EXPECT_NEAR(solar.log_lambda_norm(5.35), -20.96, 1e-9);  // data/cooling/sutherland_dopita_1993/README.md: solar peak
   const cooling::CoolingTable primordial(kTables, "primordial");
   EXPECT_NEAR(primordial.log_lambda_norm(4.20), -21.90, 1e-9);  // H peak
   EXPECT_NEAR(primordial.log_lambda_norm(4.90), -22.23, 1e-9);  // He+ peak

@@ -199,7 +199,7 @@ TEST(MsphPhaseBoundary, HotGasSeesHotPhaseAloneAndClumpIgnoresHotGas) {
       // Still coupled to part of the clump: the rule started from SPH densities (the first
       // pass has nothing else) and this particle's SPH density was already above
       // rho_cold / A for some cold neighbour, so D(hot, cold) never held; the coupled
-      // density then keeps it from holding (PHYSICS.md §2: the rule reads the latest
+      // density then keeps it from holding (docs/physics.md §2: the rule reads the latest
       // density). Only the first shell of hot particles right against the surface.
       ++stuck;
       EXPECT_LE(r_msph, r_sph * (1 + 1e-9)) << "hot particle " << id;

@@ -1,5 +1,5 @@
 // Tests of the rotating collapsing sphere initial conditions (Navarro & White 1993 set-up,
-// REFERENCES.md section 2) and of writing them, with dark matter, as a GADGET HDF5 file.
+// docs/physics.md §8.1) and of writing them, with dark matter, as a GADGET HDF5 file.
 #include <gtest/gtest.h>
 
 #include "TempDirTest.hpp"
@@ -358,7 +358,7 @@ TEST(SphereIcs, SpinAndThermalFractionFromParticles) {
   // And (tighter) the generator's own bookkeeping agrees with the independent sums.
   EXPECT_NEAR(m.spin / p.spin, 1.0, 1e-6);
   EXPECT_NEAR(ic.potential_energy / m.W, 1.0, 1e-6);
-  // Closed forms (REFERENCES.md 2.5): |W|/M = 28 673 (km/s)^2, u = 1434 (km/s)^2,
+  // Closed forms (docs/physics.md §8.1): |W|/M = 28 673 (km/s)^2, u = 1434 (km/s)^2,
   // omega = 0.778 km/s per kpc/h; the lattice's I_z differs from M R^2/3 by ~1 %.
   EXPECT_NEAR(ic.u / 1434.0, 1.0, 0.02);
   EXPECT_NEAR(ic.omega / 778.0, 1.0, 0.03);

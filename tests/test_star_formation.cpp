@@ -1,4 +1,4 @@
-// Star formation and multiphase feedback (PHYSICS.md sections 5-6) in the engine: the rate
+// Star formation and multiphase feedback (docs/physics.md sections 5-6) in the engine: the rate
 // against its closed form, each eligibility condition, conservation through spawning and
 // dissolving, feedback bookkeeping, promotion, and reproducibility across thread counts.
 #include <gtest/gtest.h>

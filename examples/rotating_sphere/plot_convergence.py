@@ -5,7 +5,7 @@ table of gas phases at the last output (about 1.2 Gyr).
     /usr/bin/python3 examples/rotating_sphere/plot_convergence.py examples/rotating_sphere/output \
         [--docs docs/validation]
 
-Phases (PHYSICS.md section 7, the paper's section 3.2): hot T > 2 T* = 8e4 K; cold T <= 2 T*
+Phases (docs/physics.md section 7, the paper's section 3.2): hot T > 2 T* = 8e4 K; cold T <= 2 T*
 and rho > 0.1 rho* (rho* = 5e-26 g/cm^3); warm otherwise. Times in Gyr for h = 1.
 """
 import argparse

@@ -1,4 +1,4 @@
-// The paper's time-series diagnostics (PHYSICS.md section 7): gas phases, energies, momenta, unbound gas.
+// The paper's time-series diagnostics (docs/physics.md section 7): gas phases, energies, momenta, unbound gas.
 #pragma once
 #include <functional>
 

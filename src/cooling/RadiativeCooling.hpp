@@ -1,4 +1,4 @@
-// Optically thin radiative cooling from the SD93 tables, integrated implicitly (PHYSICS.md §4).
+// Optically thin radiative cooling from the SD93 tables, integrated implicitly (docs/physics.md §4).
 #pragma once
 #include "cooling/CoolingTable.hpp"
 #include <vector>

@@ -6,7 +6,7 @@
 namespace fountain::gravity {
 
 // Softening lengths are given as the Plummer-equivalent eps everywhere (that is what
-// PHYSICS.md and the parameter files quote); the spline reaches Newtonian at h = 2.8 eps.
+// docs/physics.md and the parameter files quote); the spline reaches Newtonian at h = 2.8 eps.
 inline constexpr double kSplineFactor = 2.8;
 
 constexpr double spline_length(double eps) { return kSplineFactor * eps; }

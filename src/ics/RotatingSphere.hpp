@@ -1,7 +1,7 @@
 // The rotating collapsing sphere of Navarro & White (1993), as rerun by Marri & White (2003)
 // section 3: gas and dark matter on superposed cubic lattices, stretched radially to
 // rho = M / (2 pi R^2 r), in solid-body rotation about z with a given spin parameter, the gas
-// with a uniform specific thermal energy. Recipe and closed forms: REFERENCES.md section 2.
+// with a uniform specific thermal energy. Recipe and closed forms: docs/physics.md §8.1.
 #pragma once
 #include <cstdint>
 #include <vector>

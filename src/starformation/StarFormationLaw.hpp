@@ -1,4 +1,4 @@
-// The star formation recipe and the feedback phase rules as pure functions (PHYSICS.md sections 5-6).
+// The star formation recipe and the feedback phase rules as pure functions (docs/physics.md sections 5-6).
 #pragma once
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// Star formation and multiphase feedback settings of a run (PHYSICS.md sections 5-6).
+// Star formation and multiphase feedback settings of a run (docs/physics.md sections 5-6).
 #pragma once
 
 #include "core/Units.hpp"
