@@ -12,12 +12,16 @@ namespace fountain::io {
 
 // 3: dark matter (/DarkMatter), gas a_grav and potential, particle counts in /Restart.
 // 6: hybrid gas fields, stars among the collisionless particles, star formation tally.
-inline constexpr int kRestartFormatVersion = 6;
+// 7: the integer time at which the step in progress began (TiStepBegin).
+inline constexpr int kRestartFormatVersion = 7;
 
 struct RestartState {
   GasParticles gas;
   CollisionlessParticles dm;  // empty in a run without dark matter
   std::int64_t ti_current = 0;
+  // A file written inside a step (after its recut, before its tasks) holds the particles at
+  // the step's end time ti_current; the step began at ti_step_begin (= ti_current otherwise).
+  std::int64_t ti_step_begin = 0;
   long long steps = 0;
   int snapshots_written = 0;
   int next_output = 1;

@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "core/Error.hpp"
+#include "core/PeriodicWrap.hpp"
 #include "io/Hdf5File.hpp"
 
 namespace fountain::io {
@@ -198,9 +199,17 @@ constexpr Dimensions kNone{0, 0, 0, 0};
 constexpr Dimensions kAcceleration{0, 1, -2, 0};
 constexpr Dimensions kPotential{0, 2, -2, -1};  // SWIFT: potentials scale as 1/a
 
+// Positions as a snapshot stores them: in a periodic box, each particle's image in [0, L)
+// (a particle drifts out of the box between the recuts that fold it back).
+std::vector<Vec3> positions_in_box(std::vector<Vec3> x, const SnapshotInfo& info) {
+  if (info.periodic)
+    for (Vec3& p : x) p = wrap_into_box(p, info.box_size);
+  return x;
+}
+
 // The particles of one species as a GADGET PartType group.
 void write_collisionless(File& file, const std::string& group, const CollisionlessParticles& p, Species species,
-                         const Units& units) {
+                         const Units& units, const SnapshotInfo& info) {
   std::vector<std::size_t> pick;
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.species[i] == species) pick.push_back(i);
@@ -212,7 +221,7 @@ void write_collisionless(File& file, const std::string& group, const Collisionle
   };
   auto ds = [&](const char* name) { return group + "/" + name; };
   file.create_group(group);
-  file.write_dataset(ds("Coordinates"), subset(p.x));
+  file.write_dataset(ds("Coordinates"), positions_in_box(subset(p.x), info));
   write_dataset_units(file, ds("Coordinates"), units, kPosition, "Positions of the particles");
   file.write_dataset(ds("Velocities"), subset(p.v));
   write_dataset_units(file, ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
@@ -307,7 +316,7 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     file.create_group("/PartType0");
     auto ds = [](const char* name) { return std::string("/PartType0/") + name; };
 
-    file.write_dataset(ds("Coordinates"), gas.x);
+    file.write_dataset(ds("Coordinates"), positions_in_box(gas.x, info));
     write_dataset_units(file, ds("Coordinates"), units, kPosition, "Positions of the particles");
     file.write_dataset(ds("Velocities"), gas.v);
     write_dataset_units(file, ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
@@ -366,8 +375,8 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     }
 
     // /PartType1 (dark matter) and /PartType4 (stars): MassTable stays 0, masses per particle.
-    if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, units);
-    if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, units);
+    if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, units, info);
+    if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, units, info);
   });
 }
 

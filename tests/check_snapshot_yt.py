@@ -5,7 +5,8 @@ Usage: check_snapshot_yt.py SNAPSHOT.hdf5
 
 yt recognises Fountain snapshots with its GADGET HDF5 frontend (GadgetHDF5Dataset; see the
 comment at the top of io/Snapshot.cpp for why not the SWIFT one). That frontend ignores
-/Units, so the units are passed as unit_base from the GADGET-named attributes in /Units.
+/Units and reads only a cubic box, so the snapshot is loaded as users load it, through
+scripts/fountain_yt.py (units as unit_base, a non-cubic box as bounding_box).
 Prints OK and exits 0 when the total gas mass -- and, for a snapshot with /PartType1, the
 total dark matter mass -- agree to 1e-10 (relative), else prints the difference and exits 1.
 """
@@ -27,6 +28,9 @@ def main(argv):
     import numpy as np
     import yt
 
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+    import fountain_yt
+
     yt.set_log_level(50)
     logging.getLogger("yt").setLevel(logging.CRITICAL)
 
@@ -36,30 +40,18 @@ def main(argv):
             dm_masses = (
                 np.asarray(f["/PartType1/Masses"][...], dtype=np.float64) if "PartType1" in f else None
             )
-            units = dict(f["/Units"].attrs)
-            box = np.ravel(f["/Header"].attrs["BoxSize"]).astype(np.float64)
-        length_cgs = float(np.ravel(units["Unit length in cgs (U_L)"])[0])
-        mass_cgs = float(np.ravel(units["Unit mass in cgs (U_M)"])[0])
-        time_cgs = float(np.ravel(units["Unit time in cgs (U_t)"])[0])
+        extra = fountain_yt.load_arguments(path)
+        mass_cgs = extra["unit_base"]["UnitMass_in_g"]
     except Exception as e:  # noqa: BLE001 -- not a Fountain snapshot
         print(f"FAIL: h5py cannot read /PartType0/Masses and /Units from {path}: {type(e).__name__}: {e}")
         return 1
-    unit_base = {
-        "UnitLength_in_cm": length_cgs,
-        "UnitMass_in_g": mass_cgs,
-        "UnitVelocity_in_cm_per_s": length_cgs / time_cgs,
-    }
     expected_g = float(np.sum(masses)) * mass_cgs
-    extra = {}
-    if box.size == 3:
-        # A non-cubic box: yt's GADGET reader only understands a scalar BoxSize.
-        extra["bounding_box"] = [[0.0, box[0]], [0.0, box[1]], [0.0, box[2]]]
 
     # Keep yt's index file out of the snapshot folder.
     with tempfile.TemporaryDirectory() as tmp:
         index = os.path.join(tmp, os.path.basename(path) + ".ewah")
         try:
-            ds = yt.load(path, unit_base=unit_base, index_filename=index, **extra)
+            ds = yt.load(path, index_filename=index, **extra)
         except Exception as e:  # noqa: BLE001 -- any failure to load is the answer
             print(f"FAIL: yt cannot load {path}: {type(e).__name__}: {e}")
             return 1

@@ -375,7 +375,7 @@ with h5py.File('out/restart.hdf5', 'a') as f: f['Gas/u'][2] = 1.2345"
     expect_error_restart "corrupted"
     # A run folder moved elsewhere continues from its restart file (output.directory may
     # change), and may turn on timeline dumps (diagnostics only) and pinned threads.
-    "$bin" run params.yml -q > /dev/null 2>&1 || fail "run"
+    "$bin" run params.yml -q --overwrite > /dev/null 2>&1 || fail "run"
     cp -r out moved
     sed 's/^  directory: out$/  directory: moved\n  dump_timeline_every: 1/; s/^run:$/run:\n  pin_threads: true/' \
       params.yml > moved.yml

@@ -105,6 +105,11 @@ TEST_P(HydroBruteForce, LoopsMatchDirectSummation) {
     const auto f = bf.force(i);
     for (int k = 0; k < 3; ++k) expect_close(gas.a_hydro[i][k], f.a[k], a_scale, "acceleration", gas.id[i]);
     expect_close(gas.du_dt[i], f.du_dt, du_scale, "du/dt", gas.id[i]);
+    // The signal velocity the signal-velocity Courant criterion reads: the largest over the
+    // coupled pairs, and at least 2 c_i.
+    const double c_i = hydro::sound_speed(gas.rho[i], gas.u[i], cfg.hydro.gamma);
+    EXPECT_NEAR(gas.v_sig[i], std::max(f.v_sig, 2.0 * c_i), 1e-12 * gas.v_sig[i]) << "v_sig of particle " << gas.id[i];
+    EXPECT_GE(f.v_sig, c_i) << "particle " << gas.id[i] << " has no force pair";
     if (::testing::Test::HasFailure()) break;  // one particle's report is enough
   }
   EXPECT_GT(checked, gas.size() / 2);

@@ -145,12 +145,30 @@ TEST(PairLanes, ForceMatchesOnePairForm) {
   const double scale = norm(one.a);
   for (int d = 0; d < 3; ++d) EXPECT_NEAR(s.a[d], one.a[d], 1e-12 * scale);
   EXPECT_NEAR(s.du_dt, one.du_dt, 1e-12 * std::fabs(one.du_dt));
+  EXPECT_EQ(s.v_sig, one.v_sig);  // a maximum: the same pairs give the same value
+  EXPECT_GT(one.v_sig, fi.c);
 }
 
 TEST(Timestep, CourantCriterion) {
   const HydroParams p = params(false);
   EXPECT_DOUBLE_EQ(hydro::courant_timestep(0.5, 0.0, 2.0, 1.0, p), 0.1 * 0.5 / (2.0 * (1 + 0.6 * 1.3)));
   EXPECT_DOUBLE_EQ(hydro::courant_timestep(0.5, -4.0, 2.0, 3.0, p), 0.1 * 0.5 / (2.0 + 3.0 * (1 + 0.6 * 1.3)));
+}
+
+TEST(Timestep, SignalVelocityCriterionMatchesThePapersAtRest) {
+  HydroParams p = params(false);
+  // Gas at rest: v_sig = c_i + c_j = 2c, and the two criteria give one step.
+  const double h = 0.5, c = 2.0;
+  EXPECT_DOUBLE_EQ(hydro::signal_velocity_timestep(h, hydro::signal_velocity(c, c, 0.0, 1.0), p),
+                   hydro::courant_timestep(h, 0.0, c, 0.0, p));
+  // Approaching pairs raise the signal velocity by 3 |w|; receding ones do not lower it.
+  EXPECT_DOUBLE_EQ(hydro::signal_velocity(1.0, 2.0, -0.5, 2.0), 1.0 + 2.0 + 3.0);
+  EXPECT_DOUBLE_EQ(hydro::signal_velocity(1.0, 2.0, 0.5, 2.0), 3.0);
+  // The parameter picks the criterion.
+  p.courant_criterion = CourantCriterion::SignalVelocity;
+  EXPECT_DOUBLE_EQ(hydro::hydro_timestep(h, -4.0, c, 3.0, 10.0, p), hydro::signal_velocity_timestep(h, 10.0, p));
+  p.courant_criterion = CourantCriterion::Syw;
+  EXPECT_DOUBLE_EQ(hydro::hydro_timestep(h, -4.0, c, 3.0, 10.0, p), hydro::courant_timestep(h, -4.0, c, 3.0, p));
 }
 
 }  // namespace

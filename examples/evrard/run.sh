@@ -34,7 +34,7 @@ gravity:
   G: 1.0
   softening_gas: 0.02
 EOT
-  [ -f "run_$n/snapshot_0001.hdf5" ] || "$bin" run "params_$n.yml" -t "${THREADS:-2}" -q
+  [ -f "run_$n/snapshot_0001.hdf5" ] || "$bin" run "params_$n.yml" -t "${THREADS:-2}" -q --overwrite
 done
 /usr/bin/python3 "$here/plot_evrard.py" run_8/snapshot_0001.hdf5 run_16/snapshot_0001.hdf5 run_8/statistics.txt \
   -o "$root/docs/validation/evrard.png"

@@ -52,6 +52,14 @@ def main(folder, at_gyr=None):
         unbound = [runs[n]["unbound"] for n in g]
         row("less massive objects lose a larger fraction of their gas (unbound)",
             ", ".join(f"{n} {u:.3f}" for n, u in zip(g, unbound)), all(a >= b for a, b in zip(unbound, unbound[1:])))
+    if not runs:
+        print(f"No run of R01-R05 or G09-G12 has statistics in {folder}.")
+        return
+    if not rows:
+        print(f"The paper's claims (section 3.3) each compare two or more of R01-R05 or G09-G12; of these, "
+              f"only {', '.join(runs)} ran here, so there is nothing to compare. Run the full set with "
+              f"sh examples/rotating_sphere/run_feedback.sh.")
+        return
     times = sorted({round(r["t_gyr"], 2) for r in runs.values()})
     print(f"At t = {', '.join(f'{t:.2f}' for t in times)} Gyr (fractions of each run's baryons):\n")
     print("| the paper (section 3.3) | these runs | holds |\n|---|---|---|")

@@ -99,6 +99,10 @@ plot() {
     --title "$name, $n particles per species" --at "$t_end_gyr"
 }
 plot feedback_R R01 R02 R03 R04 R05
-if [ -f "$out/R04/statistics.txt" ] && [ ! -e "$out/G12" ]; then ln -s R04 "$out/G12"; fi
-plot feedback_G G09 G10 G11 G12
+# G12 joins the mass sequence only beside another of its runs: R04 alone is no sequence.
+if [ -f "$out/R04/statistics.txt" ] && [ ! -e "$out/G12" ] &&
+  { [ -f "$out/G09/statistics.txt" ] || [ -f "$out/G10/statistics.txt" ] || [ -f "$out/G11/statistics.txt" ]; }; then
+  ln -s R04 "$out/G12"
+fi
+[ -e "$out/G12" ] && plot feedback_G G09 G10 G11 G12
 $py "$here/compare_feedback.py" "$out" "$t_end_gyr" | tee "$out/comparison.md"

@@ -14,7 +14,7 @@ run_or_resume() {
     if [ -f "$1/restart.hdf5" ]; then
       "$bin" run "$1/params.yml" -t "$threads" -q --restart &
     else
-      "$bin" run "$1/params.yml" -t "$threads" -q &
+      "$bin" run "$1/params.yml" -t "$threads" -q --overwrite &
     fi
     pid=$!
     [ -z "${pid_file:-}" ] || echo "$pid" > "$pid_file"

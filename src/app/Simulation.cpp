@@ -10,12 +10,16 @@
 #include <fstream>
 #include <memory>
 #include <string_view>
+#include <tuple>
+#include <vector>
 
 #include <pthread.h>
 #include <signal.h>
 #include <unistd.h>
 
 #include "core/Error.hpp"
+#include "app/OutputFolder.hpp"
+#include "core/PeriodicWrap.hpp"
 #include "engine/Engine.hpp"
 #include "io/InitialConditions.hpp"
 #include "io/RestartFile.hpp"
@@ -41,7 +45,10 @@ std::string build_options() { return FOUNTAIN_BUILD_OPTIONS; }
 namespace {
 
 // Fails early, before any work, if the output folder cannot be created or written.
-void check_output_directory(const std::string& dir) {
+void check_output_directory(const ParameterFile& params, const std::string& dir) {
+  if (dir.empty()) throw InputError(fmt::format("{} is empty: name the output folder", params.where("output.directory")));
+  if (params.text("output.basename").empty())
+    throw InputError(fmt::format("{} is empty: snapshots need a name", params.where("output.basename")));
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
@@ -58,9 +65,67 @@ void check_output_directory(const std::string& dir) {
 }
 
 std::string resolve_ic_path(const ParameterFile& params) {
+  if (params.text("initial_conditions.file").empty())
+    throw InputError(fmt::format("{} is empty: name the initial conditions file",
+                                 params.where("initial_conditions.file")));
   fs::path ic = params.text("initial_conditions.file");
   if (ic.is_relative()) ic = fs::path(params.origin()).parent_path() / ic;
   return ic.lexically_normal().string();
+}
+
+// Gas particles at one position have no defined density: the smoothing length cannot
+// converge. Checked before the run, where the cause can still be named (in a periodic box,
+// positions are compared once folded into it: a BoxSize smaller than the particles' extent
+// folds them onto each other).
+void check_distinct_positions(const io::InitialConditions& ic, bool periodic, const std::string& path) {
+  const std::size_t n = ic.gas.size();
+  std::vector<Vec3> x(ic.gas.x);
+  if (periodic)
+    for (Vec3& p : x) p = wrap_into_box(p, ic.box_size);
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  auto less = [&](std::size_t a, std::size_t b) {
+    return std::tie(x[a].x, x[a].y, x[a].z) < std::tie(x[b].x, x[b].y, x[b].z);
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (std::size_t k = 1; k < n; ++k) {
+    const std::size_t a = order[k - 1], b = order[k];
+    if (x[a] != x[b]) continue;
+    std::size_t same = 2;
+    while (k + 1 < n && x[order[k + 1]] == x[a]) ++k, ++same;
+    throw InputError(fmt::format(
+        "{}: gas particles ID {} and ID {}{} lie at the same position ({}, {}, {}){}, where SPH cannot give them a "
+        "density{}",
+        path, ic.gas.id[a], ic.gas.id[b], same > 2 ? fmt::format(" (and {} more)", same - 2) : "", x[a].x, x[a].y,
+        x[a].z, periodic ? " once folded into the periodic box" : "",
+        periodic ? fmt::format(" (is /Header/BoxSize = ({}, {}, {}) smaller than the particles' extent?)", ic.box_size.x,
+                               ic.box_size.y, ic.box_size.z)
+                 : ""));
+  }
+}
+
+// A periodic run's particles must fit its box: ones that span more than the box (beyond the
+// drift of a snapshot's last steps) mean BoxSize is not the box they were laid in.
+void check_fits_periodic_box(const io::InitialConditions& ic, const std::string& path) {
+  if (!(ic.box_size.x > 0 && ic.box_size.y > 0 && ic.box_size.z > 0))
+    throw InputError(fmt::format("{}: periodic run needs a positive /Header/BoxSize", path));
+  constexpr double kSlack = 1.1;
+  for (int k = 0; k < 3; ++k) {
+    double lo = 1e300, hi = -1e300;
+    for (const auto* xs : {&ic.gas.x, &ic.dm.x})
+      for (const Vec3& p : *xs) lo = std::min(lo, p[k]), hi = std::max(hi, p[k]);
+    if (hi - lo > kSlack * ic.box_size[k])
+      throw InputError(fmt::format("{}: the particles span {} along {} (from {} to {}), more than the periodic box's "
+                                   "side /Header/BoxSize = {}: is BoxSize in the particles' units?",
+                                   path, hi - lo, "xyz"[k], lo, hi, ic.box_size[k]));
+  }
+  for (const auto* xs : {&ic.gas.x, &ic.dm.x})
+    for (std::size_t i = 0; i < xs->size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        if ((*xs)[i][k] < -ic.box_size[k] || (*xs)[i][k] > 2 * ic.box_size[k])
+          throw InputError(fmt::format("{}: {} particle ID {} lies far outside the periodic box", path,
+                                       xs == &ic.gas.x ? "gas" : "dark matter",
+                                       xs == &ic.gas.x ? ic.gas.id[i] : ic.dm.id[i]));
 }
 
 }  // namespace
@@ -104,14 +169,38 @@ void check_same_parameters(const io::RestartState& state, const ParameterFile& p
 
 std::string restart_path(const ParameterFile& params) { return params.text("output.directory") + "/restart.hdf5"; }
 
-RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int threads_override, bool restart,
-                          long long abandon_after_steps) {
-  bool quiet = quiet_requested;
+RunSummary run_simulation(const ParameterFile& params, const RunOptions& options) {
+  bool quiet = options.quiet;
+  const bool restart = options.restart;
+  const long long abandon_after_steps = options.abandon_after_steps;
   const auto t_start = std::chrono::steady_clock::now();
   RunConfig config = RunConfig::from(params);
-  if (threads_override >= 0) config.threads = threads_override;
-  check_output_directory(config.output.directory);
-  io::InitialConditions ic = io::read_initial_conditions(resolve_ic_path(params));
+  if (options.threads)
+    config.threads = static_cast<int>(
+        std::stoll(ParameterFile::check("run.threads", std::to_string(*options.threads), "option -t,--threads")));
+  const std::string ic_path = resolve_ic_path(params);
+  check_output_directory(params, config.output.directory);
+  // Rank 0 holds the folder for the whole run; it alone writes snapshots and the master files.
+  std::unique_ptr<OutputFolderLock> lock;
+  if (options.rank == 0) {
+    lock = std::make_unique<OutputFolderLock>(config.output.directory);
+    if (!lock->stale_holder().empty())
+      fmt::print(stderr, "note: took over the lock of {} left by a run that did not end ({})\n",
+                 config.output.directory, lock->stale_holder());
+    guard_output_folder(config.output.directory, config.output.basename, {ic_path, params.origin()}, restart,
+                        options.overwrite);
+  }
+  io::InitialConditions ic = io::read_initial_conditions(ic_path);
+  // A snapshot used as initial conditions carries its time: the run goes on from there.
+  if (!params.was_given("run.t_begin")) {
+    config.t_begin = ic.time;
+    config.check_times(params, fmt::format("/Header/Time of {}", ic_path));
+  } else if (ic.time != config.t_begin && options.rank == 0) {
+    fmt::print(stderr, "warning: {} = {} differs from /Header/Time = {} of {}; the run starts at {}\n",
+               params.where("run.t_begin"), config.t_begin, ic.time, ic_path, config.t_begin);
+  }
+  if (config.space.periodic) check_fits_periodic_box(ic, ic_path);
+  check_distinct_positions(ic, config.space.periodic, ic_path);
   io::RestartState state;
   if (restart) {
     state = io::read_restart(restart_path(params));
@@ -125,20 +214,6 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     ic.dm = std::move(state.dm);
   }
   config.space.box_size = ic.box_size;
-  if (config.space.periodic && !(ic.box_size.x > 0 && ic.box_size.y > 0 && ic.box_size.z > 0))
-    throw InputError(fmt::format("{}: periodic run needs a positive /Header/BoxSize", resolve_ic_path(params)));
-  if (config.space.periodic)
-    for (std::size_t i = 0; i < ic.gas.size(); ++i)
-      for (int k = 0; k < 3; ++k)
-        if (ic.gas.x[i][k] < -ic.box_size[k] || ic.gas.x[i][k] > 2 * ic.box_size[k])
-          throw InputError(fmt::format("{}: particle ID {} lies far outside the periodic box", resolve_ic_path(params),
-                                       ic.gas.id[i]));
-  if (config.space.periodic)
-    for (std::size_t i = 0; i < ic.dm.size(); ++i)
-      for (int k = 0; k < 3; ++k)
-        if (ic.dm.x[i][k] < -ic.box_size[k] || ic.dm.x[i][k] > 2 * ic.box_size[k])
-          throw InputError(fmt::format("{}: dark matter particle ID {} lies far outside the periodic box",
-                                       resolve_ic_path(params), ic.dm.id[i]));
 
   Engine engine(config, std::move(ic.gas), std::move(ic.dm));
   // Every rank holds the whole state; rank 0 alone writes files and reports.
@@ -148,12 +223,14 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   const bool dump_timeline = config.output.dump_timeline_every > 0;
   engine.set_record_timeline(dump_timeline || config.output.dump_task_graph);
   if (restart) {
-    engine.restore(state.ti_current, state.steps);
+    engine.restore(state.ti_current, state.steps, state.ti_step_begin);
     engine.set_radiated_energy(state.radiated_energy);
     engine.set_star_formation_total(state.star_formation);
     if (state.next_particle_id > 0) engine.set_next_particle_id(state.next_particle_id);
-    if (!quiet) fmt::print(stderr, "restarted from {} at t = {:.6g}, step {}\n", restart_path(params), engine.time(),
-                           engine.steps());
+    // A file written inside a step holds its end; the run goes on from the step's start.
+    if (!quiet)
+      fmt::print(stderr, "restarted from {} at t = {:.6g}, step {}\n", restart_path(params),
+                 engine.timeline().time(state.ti_step_begin), engine.steps());
   } else {
     engine.initialise();
   }
@@ -216,6 +293,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
       out.dm = engine.dark_matter();
     }
     out.ti_current = engine.ti_current();
+    out.ti_step_begin = engine.ti_step_begin();
     out.steps = engine.steps();
     out.snapshots_written = summary.snapshots;
     out.next_output = next_output;
@@ -272,6 +350,15 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     return t >= config.t_end ? TimeLine::ticks : engine.to_ticks(t);
   };
   IntegerTime ti_out = next_output_ticks();
+  // Never a step of length zero, never two snapshots at one time: an output time at or
+  // before the present (the first one after a restart, say) is passed over.
+  auto skip_past_outputs = [&] {
+    while (ti_out <= engine.ti_current() && ti_out < TimeLine::ticks) {
+      ++next_output;
+      ti_out = next_output_ticks();
+    }
+  };
+  skip_past_outputs();
 
   std::unique_ptr<io::StatisticsFile> statistics;
   if (config.output.statistics_every > 0 && io_rank)
@@ -300,6 +387,9 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
     engine.gather_state();
     if (statistics) write_statistics();
   }
+  // The first restart file comes at the start, right after the first cut of the cells: a run
+  // killed before its first due restart file can still be continued with --restart.
+  if (!restart && (config.restart.every_steps > 0 || config.restart.every_minutes > 0)) save_restart();
 
   while (!engine.finished()) {
     if (config.max_steps > 0 && engine.steps() >= config.max_steps) break;
@@ -320,6 +410,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
       write();
       ++next_output;
       ti_out = next_output_ticks();
+      skip_past_outputs();
     }
     if (engine.finished()) break;
     const double minutes = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_restart).count() / 60.0;
@@ -362,6 +453,7 @@ RunSummary run_simulation(const ParameterFile& params, bool quiet_requested, int
   summary.exchange_s = engine.exchange_seconds();
   summary.halo_mode = engine.halo_mode();
   summary.held_share = engine.held_share();
+  summary.h_max_capped = engine.h_max_capped();
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return summary;
 }

@@ -1,6 +1,7 @@
 // A whole run: reads the initial conditions, steps the engine, writes snapshots and dumps.
 #pragma once
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "engine/RunConfig.hpp"
@@ -23,15 +24,26 @@ struct RunSummary {
   double graph_s = 0.0, exchange_s = 0.0;  // this rank: in task graphs, in the exchanges after them
   bool halo_mode = false;
   double held_share = 1.0;  // of the leaves, kept current by this rank (Engine::held_share)
+  long long h_max_capped = 0;  // particle-steps held at hydro.h_max short of neighbours
+};
+
+// How `fountain run` was asked to run, beyond the parameter file.
+struct RunOptions {
+  bool quiet = false;
+  std::optional<long long> threads;  // -t: overrides run.threads (checked against its range)
+  bool restart = false;              // continue from <output.directory>/restart.hdf5
+  bool overwrite = false;            // a fresh run may replace an earlier run's files in its folder
+  // With a value > 0 the run stops once that many steps are done and writes nothing more, as
+  // a run killed there would: tests of restarts stop a run deterministically.
+  long long abandon_after_steps = 0;
+  int rank = 0;  // this process's MPI rank: rank 0 alone holds the output folder's lock
 };
 
 // Runs the parameter file's problem to run.t_end, or continues it from its restart file
-// (<output.directory>/restart.hdf5) with `restart`. Problems with the input (the parameter
-// file, the IC file, the output folder, the restart file) throw InputError before any step.
-// With abandon_after_steps > 0 the run stops once that many steps are done and writes
-// nothing more, as a run killed there would: tests of restarts stop a run deterministically.
-RunSummary run_simulation(const ParameterFile& params, bool quiet = false, int threads_override = -1,
-                          bool restart = false, long long abandon_after_steps = 0);
+// (<output.directory>/restart.hdf5) with `options.restart`. Problems with the input (the
+// parameter file, the IC file, the output folder and what it holds, the restart file) throw
+// InputError before any step. The run holds its output folder's lock until it returns.
+RunSummary run_simulation(const ParameterFile& params, const RunOptions& options = {});
 
 // Where a run's restart file lives.
 std::string restart_path(const ParameterFile& params);

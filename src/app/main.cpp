@@ -3,15 +3,29 @@
 #include <fmt/format.h>
 
 #include <exception>
+#include <string_view>
+#include <vector>
 
+#include "app/IcCommand.hpp"
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
-#include "ics/RotatingSphere.hpp"
-#include "ics/TestProblems.hpp"
-#include "io/InitialConditions.hpp"
 #include "params/ParameterFile.hpp"
 #include "params/ParameterSchema.hpp"
 #include "tasks/MpiSession.hpp"
+
+namespace {
+
+constexpr const char* kCommands[] = {"run", "ic", "params"};
+
+// CLI11 answers an unknown first word with "A subcommand is required": name it instead.
+bool is_unknown_command(int argc, char** argv) {
+  if (argc < 2 || argv[1][0] == '-') return false;
+  for (const char* c : kCommands)
+    if (std::string_view(argv[1]) == c) return false;
+  return true;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace fountain;
@@ -21,40 +35,48 @@ int main(int argc, char** argv) {
 
   auto* run = app.add_subcommand("run", "Run the problem of a YAML parameter file");
   std::string param_path;
-  int threads = -1;
-  bool quiet = false, restart = false;
+  RunOptions options;
+  long long threads = 0, abandon_after = 0;
   run->add_option("params", param_path, "Parameter file")->required();
-  run->add_option("-t,--threads", threads, "Worker threads (overrides run.threads)");
-  run->add_flag("-q,--quiet", quiet, "No per-step progress lines");
-  run->add_flag("-r,--restart", restart, "Continue from <output.directory>/restart.hdf5");
-  long long abandon_after = 0;
-  run->add_option("--abandon-after-steps", abandon_after,
-                  "Stop once the step count (as printed, continued across restarts) reaches this and write nothing "
-                  "more, as a run killed there would (to test restarts)")
-      ->check(CLI::PositiveNumber);
+  auto* threads_opt = run->add_option("-t,--threads", threads, "Worker threads (overrides run.threads)");
+  run->add_flag("-q,--quiet", options.quiet, "No per-step progress lines");
+  run->add_flag("-r,--restart", options.restart, "Continue from <output.directory>/restart.hdf5");
+  run->add_flag("--overwrite", options.overwrite,
+                "Start afresh in an output folder that holds an earlier run's snapshots, restart files or "
+                "statistics, removing them");
+  auto* abandon_opt = run->add_option(
+      "--abandon-after-steps", abandon_after,
+      "Stop once the step count (as printed, continued across restarts) reaches this and write nothing "
+      "more, as a run killed there would (to test restarts)");
 
   auto* ic = app.add_subcommand("ic", "Write the initial conditions of a validation problem");
-  std::string problem, out_path;
-  int resolution = 0;
-  double gamma = 5.0 / 3.0;
-  ics::RotatingSphereParams sphere;
-  ic->add_option("problem", problem, "sod | sedov | gresho | evrard | sphere")
+  IcRequest request;
+  ic->add_option("problem", request.problem, "sod | sedov | gresho | evrard | sphere")
       ->required()
       ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere"}));
-  ic->add_option("-o,--output", out_path, "Output HDF5 file")->required();
-  ic->add_option("-n,--resolution", resolution,
-                 "Lattice cells per unit length (sod: left state; sedov, gresho: per box side; evrard: per radius); "
-                 "sphere: particles per species (default 4000)");
-  ic->add_option("--gamma", gamma, "Adiabatic index");
-  ic->add_option("--mass", sphere.total_mass, "sphere: total mass, gas + DM [Msun/h]")->capture_default_str();
-  ic->add_option("--radius", sphere.radius, "sphere: radius [Mpc/h]")->capture_default_str();
-  ic->add_option("--spin", sphere.spin, "sphere: spin parameter lambda = J|E|^(1/2)/(G M^(5/2))")->capture_default_str();
-  ic->add_option("--thermal-fraction", sphere.thermal_fraction, "sphere: gas specific energy u over |W|/M")
-      ->capture_default_str();
-  ic->add_option("--gas-fraction", sphere.gas_fraction, "sphere: gas mass over total mass")->capture_default_str();
+  ic->add_option("-o,--output", request.output, "Output HDF5 file")->required();
+  auto* resolution_opt =
+      ic->add_option("-n,--resolution", request.resolution,
+                     "Lattice cells per unit length (sod: left state; sedov, gresho: per box side; evrard: per radius); "
+                     "sphere: particles per species (default 4000)");
+  auto* gamma_opt = ic->add_option("--gamma", request.gamma, "Adiabatic index, in (1, 3] (sod, sedov, gresho)");
+  ics::RotatingSphereParams& sphere = request.sphere;
+  const std::vector<CLI::Option*> sphere_opts = {
+      ic->add_option("--mass", sphere.total_mass, "sphere: total mass, gas + DM [Msun/h]")->capture_default_str(),
+      ic->add_option("--radius", sphere.radius, "sphere: radius [Mpc/h]")->capture_default_str(),
+      ic->add_option("--spin", sphere.spin, "sphere: spin parameter lambda = J|E|^(1/2)/(G M^(5/2))")
+          ->capture_default_str(),
+      ic->add_option("--thermal-fraction", sphere.thermal_fraction, "sphere: gas specific energy u over |W|/M")
+          ->capture_default_str(),
+      ic->add_option("--gas-fraction", sphere.gas_fraction, "sphere: gas mass over total mass")->capture_default_str()};
 
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
+  if (is_unknown_command(argc, argv)) {
+    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, params (fountain --help explains them)\n",
+               argv[1]);
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -74,8 +96,13 @@ int main(int argc, char** argv) {
 
   try {
     if (*run) {
+      if (abandon_opt->count() > 0 && abandon_after <= 0)
+        throw InputError(fmt::format("option --abandon-after-steps = {} must be a positive step count", abandon_after));
+      options.abandon_after_steps = abandon_after;
+      if (threads_opt->count() > 0) options.threads = threads;
+      options.rank = mpi.rank();
       const ParameterFile params = ParameterFile::load(param_path);
-      const RunSummary s = run_simulation(params, quiet, threads, restart, abandon_after);
+      const RunSummary s = run_simulation(params, options);
       // Stopped by SIGTERM after writing a restart file: EX_TEMPFAIL, so that job scripts can
       // tell a stopped run (continue it with --restart) from a finished one.
       if (s.terminated) return 75;
@@ -83,6 +110,9 @@ int main(int argc, char** argv) {
       if (mpi.rank() == 0)
         fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
                  s.snapshots, s.wall_s);
+      if (mpi.rank() == 0 && s.h_max_capped > 0)
+        fmt::print(stderr, "warning: {} particle-steps were held at hydro.h_max with too few neighbours\n",
+                   s.h_max_capped);
       if (mpi.rank() == 0 && s.ranks > 1)
         fmt::print(stderr,
                    "ranks: {}, cell owners chosen {} times; rank 0 sent {:.3g} MB in {} messages, spent {:.2f} s in "
@@ -93,26 +123,17 @@ int main(int argc, char** argv) {
         fmt::print(stderr, "halo mode: rank 0 kept {:.1f}% of the leaves current (mean over the recuts)\n",
                    100.0 * s.held_share);
     } else if (*ic) {
-      if (problem == "sphere") {
-        if (resolution > 0) sphere.particles_per_species = resolution;
-        const ics::RotatingSphereIC s = ics::rotating_sphere(sphere);
-        // Isolated: centred on the origin; BoxSize is the enclosing cube's side (informative).
-        const double side = 2.0 * sphere.radius;
-        io::write_initial_conditions(out_path, s.gas, s.dm, {side, side, side}, false);
-        fmt::print(stderr,
-                   "wrote {} ({} gas + {} dark matter particles; omega = {:.6g} km/s per Mpc/h, u = {:.6g} (km/s)^2, "
-                   "W = {:.6g}, spin = {:.6g})\n",
-                   out_path, s.gas.size(), s.dm.size(), s.omega, s.u, s.potential_energy, s.spin);
-      } else {
-        ics::ProblemIC p;
-        if (problem == "sod") p = ics::sod_shock(resolution > 0 ? resolution : 32, gamma);
-        else if (problem == "sedov") p = ics::sedov_blast(resolution > 0 ? resolution : 24, gamma);
-        else if (problem == "evrard") p = ics::evrard_sphere(resolution > 0 ? resolution : 8);
-        else p = ics::gresho_vortex(resolution > 0 ? resolution : 32, gamma);
-        io::write_initial_conditions(out_path, p.gas, p.box_size, p.periodic);
-        fmt::print(stderr, "wrote {} ({} gas particles, box {} x {} x {})\n", out_path, p.gas.size(), p.box_size.x,
-                   p.box_size.y, p.box_size.z);
-      }
+      request.resolution_given = resolution_opt->count() > 0;
+      if (request.problem != "sphere")
+        for (const CLI::Option* o : sphere_opts)
+          if (o->count() > 0)
+            throw InputError(fmt::format("option {} applies to the sphere only, not to {}", o->get_name(),
+                                         request.problem));
+      if ((request.problem == "sphere" || request.problem == "evrard") && gamma_opt->count() > 0)
+        throw InputError(fmt::format("option --gamma does not apply to {}: its initial conditions do not depend on "
+                                     "it (the run's hydro.gamma sets it)",
+                                     request.problem));
+      fmt::print(stderr, "{}\n", write_ic(request));
     } else if (*params_cmd) {
       fmt::print("{}", parameter_reference_markdown());
     }

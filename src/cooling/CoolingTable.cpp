@@ -58,7 +58,8 @@ Table read_cie(const std::string& path) {
 }  // namespace
 
 CoolingTable::CoolingTable(const std::string& directory, const std::string& metallicity) {
-  // [Fe/H] of each file; the primordial table is placed at -4 so metallicities below -3 blend into it.
+  // [Fe/H] of each file; the primordial table sits below the lowest metal table, and the range of
+  // metallicities is the tables' own, [-3, 0.5] (no blend with primordial gas is invented).
   const std::vector<std::pair<double, std::string>> files = {
       {-4.0, "mzero.cie"}, {-3.0, "m-30.cie"}, {-2.0, "m-20.cie"}, {-1.5, "m-15.cie"},
       {-1.0, "m-10.cie"},  {-0.5, "m-05.cie"}, {0.0, "m-00.cie"},  {0.5, "m+05.cie"}};
@@ -66,8 +67,8 @@ CoolingTable::CoolingTable(const std::string& directory, const std::string& meta
   if (metallicity != "primordial") {
     char* end = nullptr;
     fe_h = std::strtod(metallicity.c_str(), &end);
-    if (end == metallicity.c_str() || *end != '\0' || !(fe_h >= -4.0 && fe_h <= 0.5))
-      throw InputError(fmt::format("key 'cooling.metallicity' must be 'primordial' or [Fe/H] in [-4, 0.5], got '{}'",
+    if (end == metallicity.c_str() || *end != '\0' || !(fe_h >= -3.0 && fe_h <= 0.5))
+      throw InputError(fmt::format("key 'cooling.metallicity' must be 'primordial' or [Fe/H] in [-3, 0.5], got '{}'",
                                    metallicity));
   }
   std::size_t k = 0;

@@ -123,7 +123,7 @@ void ghost_fields(GasParticles& g, F&& f) {
 }
 template <class F>
 void step_fields_after_ghost(GasParticles& g, F&& f) {
-  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool);
+  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool); f(g.v_sig);
   f(g.time_bin); f(g.ti_begin); f(g.limit_bin);
 }
 template <class F>

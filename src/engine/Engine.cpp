@@ -448,6 +448,7 @@ void Engine::prepare_step(IntegerTime ti) {
 void Engine::run_graph(StepInfo* info) {
   ctx_->cover_exceeded = false;
   ctx_->h_capped = 0;
+  ctx_->h_max_capped = 0;
   StepContext& ctx = *ctx_;
   const TaskTypes& T = types_;
   starformation::StarFormationState* sf = sf_.get();
@@ -541,6 +542,18 @@ void Engine::run_graph(StepInfo* info) {
                  ctx_->h_capped.load(), time(), h_capped_steps_,
                  h_capped_steps_ == 10 ? "; from here on every 1000th is printed" : "");
   }
+  if (ctx_->h_max_capped > 0) {
+    // Not harmless: these particles keep fewer neighbours than hydro.neighbours, so their
+    // density is overestimated. Counted for the run's summary; the first ten steps printed.
+    h_max_capped_particles_ += ctx_->h_max_capped;
+    ++h_max_capped_steps_;
+    if (rank_ == 0 && (h_max_capped_steps_ <= 10 || h_max_capped_steps_ % 1000 == 0))
+      fmt::print(stderr,
+                 "warning: {} particles were held at hydro.h_max = {} at t = {} with fewer than hydro.neighbours = {} "
+                 "neighbours, so their densities are too high ({} such steps{})\n",
+                 ctx_->h_max_capped.load(), config_.hydro.h_max, time(), config_.hydro.neighbours, h_max_capped_steps_,
+                 h_max_capped_steps_ == 10 ? "; from here on every 1000th is printed" : "");
+  }
 }
 
 void Engine::initialise() {
@@ -576,10 +589,11 @@ void Engine::rebuild_now() {
   prepare_step(ti_current_);
 }
 
-void Engine::restore(IntegerTime ti_current, long long steps) {
+void Engine::restore(IntegerTime ti_current, long long steps, IntegerTime ti_step_begin) {
   initialised_ = true;
   all_current_ = true;  // every rank read the same file
   ti_current_ = ti_current;
+  ti_step_begin_ = ti_step_begin;
   steps_ = steps;
   rebuild_now();
 }
@@ -637,7 +651,7 @@ void Engine::converge_density(Phase phase) {
 
 void Engine::compute_hydro_at(IntegerTime ti) {
   rebuild_pending_ = true;
-  ti_current_ = ti;
+  ti_current_ = ti_step_begin_ = ti;
   converge_density(Phase::Hydro);
 }
 
@@ -647,7 +661,9 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   IntegerTime ti_next = std::min(ti_stop, TimeLine::ticks);
   for (int c : space_.leaves()) ti_next = std::min(ti_next, space_.cell(c).ti_end_min);
   if (ti_next <= ti_current_) ti_next = ti_current_;
-  const IntegerTime ti_prev = ti_current_;
+  // After a restore from inside a step, the step re-run began before ti_current_.
+  const IntegerTime ti_prev = std::min(ti_step_begin_, ti_current_);
+  ti_step_begin_ = ti_prev;
   const int rebuilds_before = space_.rebuild_count();
   prepare_step(ti_next);
   if (after_rebuild_ && space_.rebuild_count() != rebuilds_before) after_rebuild_();
@@ -658,6 +674,7 @@ StepInfo Engine::step(IntegerTime ti_stop) {
     wake_requested();
     finish_star_formation();
   }
+  ti_step_begin_ = ti_current_;
   ++steps_;
   info.step = steps_;
   info.time = time();

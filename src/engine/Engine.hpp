@@ -70,8 +70,10 @@ class Engine {
   // Drifts everything and recuts the cells now. Called before a restart file is written, so
   // that the saved run and the restarted one continue from the same cells, bit for bit.
   void rebuild_now();
-  // Continues a run from a restart file's particles (in place of initialise()).
-  void restore(IntegerTime ti_current, long long steps);
+  // Continues a run from a restart file's particles (in place of initialise()). A file written
+  // inside a step holds the particles at that step's end, ti_current; the step began at
+  // ti_step_begin, which the first step after the restart reports as its start.
+  void restore(IntegerTime ti_current, long long steps, IntegerTime ti_step_begin);
   // Called inside step() right after the cells were recut because the run needed it, before
   // that step's tasks: a restart file written then holds the particles just as the recut
   // left them, and restore() recuts them into the same cells, so the restarted run goes on
@@ -85,9 +87,14 @@ class Engine {
 
   double time() const { return timeline_.time(ti_current_); }
   IntegerTime ti_current() const { return ti_current_; }
+  // When the step in progress began (inside step(): the previous step's end); ti_current()
+  // between steps.
+  IntegerTime ti_step_begin() const { return ti_step_begin_; }
   const TimeLine& timeline() const { return timeline_; }
   IntegerTime to_ticks(double t) const;
   long long steps() const { return steps_; }
+  // Particle-steps whose h was held at hydro.h_max short of neighbours, since the start.
+  long long h_max_capped() const { return h_max_capped_particles_; }
 
   GasParticles& gas() { return gas_; }
   const GasParticles& gas() const { return gas_; }
@@ -253,8 +260,10 @@ class Engine {
   std::uint64_t next_id_ = 0;  // for spawned stars
   double radiated_ = 0.0;
   IntegerTime ti_current_ = 0;
+  IntegerTime ti_step_begin_ = 0;
   long long steps_ = 0;
   long long h_capped_steps_ = 0;  // steps whose h solve was capped by a cell's reach
+  long long h_max_capped_steps_ = 0, h_max_capped_particles_ = 0;  // held at hydro.h_max, short of neighbours
   bool rebuild_pending_ = true;
   bool initialised_ = false;  // the first forces and timesteps are done
   std::function<void()> after_rebuild_;

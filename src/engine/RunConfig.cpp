@@ -4,6 +4,7 @@
 
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
+#include "timestep/TimeLine.hpp"
 
 namespace fountain {
 
@@ -11,9 +12,6 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   RunConfig c;
   c.t_begin = p.real("run.t_begin");
   c.t_end = p.real("run.t_end");
-  if (!(c.t_end > c.t_begin))
-    throw InputError(fmt::format("{}: key 'run.t_end' = {} must be later than run.t_begin = {}", p.origin(),
-                                 c.t_end, c.t_begin));
   c.threads = static_cast<int>(p.integer("run.threads"));
   c.pin_threads = p.flag("run.pin_threads");
   c.max_steps = p.integer("run.max_steps");
@@ -27,6 +25,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.space.periodic = p.flag("initial_conditions.periodic");
   c.space.split_size = static_cast<int>(p.integer("space.cell_split_size"));
   c.space.top_cells = static_cast<int>(p.integer("space.top_cells"));
+  c.space.top_cells_origin = p.where("space.top_cells");
   c.space.skin = p.real("space.rebuild_skin");
   c.repartition_imbalance = p.real("domain.repartition_imbalance");
   c.repartition_min_steps = p.integer("domain.repartition_min_steps");
@@ -45,7 +44,27 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.restart.every_steps = p.integer("restart.every_steps");
   c.restart.every_minutes = p.real("restart.every_minutes");
   c.parameters_yaml = p.used_as_yaml();
+  c.check_times(p, "run.t_begin");
   return c;
+}
+
+void RunConfig::check_times(const ParameterFile& p, const std::string& start_origin) const {
+  if (!(t_end > t_begin))
+    throw InputError(fmt::format("{} = {} must be later than the start time {} ({})", p.where("run.t_end"), t_end,
+                                 t_begin, start_origin));
+  // Every step and every output time is a whole number of ticks of the integer timeline.
+  const TimeLine timeline{t_begin, t_end};
+  const double tick = timeline.time_base();
+  const std::string span = fmt::format("the integer timeline cuts the run from t = {:g} to run.t_end = {:g} into 2^{} "
+                                       "ticks of {:.4g}",
+                                       t_begin, t_end, TimeLine::max_bin, tick);
+  if (timeline.bin_for(integration.dt_max) < 0)
+    throw InputError(fmt::format("{} = {} is shorter than one tick: {}; shorten the run or raise dt_max",
+                                 p.where("time_integration.dt_max"), integration.dt_max, span));
+  if (output.delta_time > 0.0 && !(output.delta_time >= tick))
+    throw InputError(fmt::format("{} = {} is shorter than one tick, so snapshots could not be told apart in time: "
+                                 "{}; raise it (0 writes only the first and the last snapshot)",
+                                 p.where("output.delta_time"), output.delta_time, span));
 }
 
 }  // namespace fountain

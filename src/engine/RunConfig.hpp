@@ -48,7 +48,12 @@ struct RunConfig {
   RestartConfig restart;
   std::string parameters_yaml;      // the parameters in force, for snapshots
 
+  // Reads and cross-checks the parameters (the start time is run.t_begin, given or default).
   static RunConfig from(const ParameterFile& p);
+  // The checks of times against the integer timeline, again once the start time is settled
+  // (`start_origin` says where it came from): t_end after the start, dt_max and the snapshot
+  // interval no shorter than one tick. Throws InputError naming the key and its line.
+  void check_times(const ParameterFile& p, const std::string& start_origin) const;
 };
 
 }  // namespace fountain

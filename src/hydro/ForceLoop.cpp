@@ -100,6 +100,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
     const ForceSums s = sum_force_pairs(fi, q, p);
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
+    gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);
     if (limiter && kept > 0) {
       const int my_bin = gas.courant_bin[i];
       int min_bin = kNoBin;
@@ -123,6 +124,7 @@ void force(StepContext& ctx, int ci) {
     if (!ctx.is_active(i)) continue;
     gas.a_hydro[i] = {};
     gas.du_dt[i] = 0.0;
+    gas.v_sig[i] = 2.0 * gas.soundspeed[i];  // as SWIFT: a lone particle's signal still travels
     gas.limit_bin[i] = kNoBin;
   }
   thread_local NeighbourBlock block;

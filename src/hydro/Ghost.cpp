@@ -92,6 +92,8 @@ void ghost(StepContext& ctx, int ci) {
         if (limit_is_cover) {
           ctx.cover_exceeded = true;
           ctx.h_capped.fetch_add(1, std::memory_order_relaxed);
+        } else {
+          ctx.h_max_capped.fetch_add(1, std::memory_order_relaxed);  // the user's cap: reported, kept
         }
       } else {
         double lo = 0.0, hi = reach;

@@ -127,7 +127,14 @@ inline ForceState make_force_state(const Vec3& v, double m, double rho, double u
 struct ForceSums {
   Vec3 a;
   double du_dt = 0.0;
+  double v_sig = 0.0;  // the largest pair signal velocity (0 without pairs)
 };
+
+// The signal velocity of a pair (Monaghan 1997; GADGET-2, SWIFT): c_i + c_j - 3 w_ij with
+// w_ij = min(0, v_ij . r_ij / |r_ij|), from vr = v_ij . r_ij and 1/|r_ij|.
+inline double signal_velocity(double ci, double cj, double vr, double inv_r) {
+  return ci + cj - 3.0 * std::min(0.0, vr * inv_r);
+}
 
 // The pair terms of paper eqs 1-2 (general alpha, Balsara-corrected viscosity), added to i.
 // dx = x_i - x_j; r2 < max(h_i, h_j)^2. Every term is symmetric in (i, j) up to the sign of
@@ -155,6 +162,7 @@ inline void iact_force(const ForceState& i, const ForceState& j, const Vec3& dx,
   const double f = j.m * ((p_ij + p_ji) + visc) * dw_mean_over_r;
   s.a -= dx * f;
   s.du_dt += j.m * (p_ji + 0.5 * visc) * dw_mean_over_r * dot(dv, dx);
+  s.v_sig = std::max(s.v_sig, signal_velocity(i.c, j.c, dot(dv, dx), 1.0 / r));
 }
 
 // ---------------------------------------------------------------- four pairs at once
@@ -243,12 +251,13 @@ struct DensityPairs {
 }
 
 struct ForceLanes {
-  double ax[kLanes]{}, ay[kLanes]{}, az[kLanes]{}, du_dt[kLanes]{};
+  double ax[kLanes]{}, ay[kLanes]{}, az[kLanes]{}, du_dt[kLanes]{}, v_sig[kLanes]{};
 
   ForceSums total() const {
     ForceSums s;
     s.a = {DensityLanes::add(ax), DensityLanes::add(ay), DensityLanes::add(az)};
     s.du_dt = DensityLanes::add(du_dt);
+    s.v_sig = std::max(std::max(v_sig[0], v_sig[1]), std::max(v_sig[2], v_sig[3]));
     return s;
   }
 };
@@ -318,6 +327,8 @@ struct ForcePairs {
     s.ay[l] -= qdy[l] * f;
     s.az[l] -= qdz[l] * f;
     s.du_dt[l] += qm[l] * (p_ji + 0.5 * visc) * dw_mean_over_r * vr;
+    // A padding pair (c_j = 0, at rest) gives c_i, below any real pair's value.
+    s.v_sig[l] = std::max(s.v_sig[l], signal_velocity(i.c, qc[l], vr, inv_r));
   }
 }
 
@@ -331,10 +342,23 @@ struct ForcePairs {
 
 // ---------------------------------------------------------------- timestep
 
-// Courant criterion of the paper (GADGET-1 form, PHYSICS.md section 3).
+// Courant criterion of the paper (GADGET-1 form, docs/physics.md section 3).
 inline double courant_timestep(double h, double div_v, double c, double speed, const HydroParams& p) {
   const double denom = h * std::fabs(div_v) + std::max(c, speed) * (1.0 + 0.6 * p.viscosity_alpha);
   return denom > 0.0 ? p.courant * h / denom : std::numeric_limits<double>::infinity();
+}
+
+// The signal-velocity criterion of GADGET-2 and SWIFT, dt = C h / v_sig,max, with C chosen so
+// that gas at rest (v_sig = 2c) gets the paper's step: C = 2 alpha_c / (1 + 0.6 alpha_v).
+inline double signal_velocity_timestep(double h, double v_sig, const HydroParams& p) {
+  const double c_sv = 2.0 * p.courant / (1.0 + 0.6 * p.viscosity_alpha);
+  return v_sig > 0.0 ? c_sv * h / v_sig : std::numeric_limits<double>::infinity();
+}
+
+// The hydrodynamic step of the criterion in force (time_integration.courant_criterion).
+inline double hydro_timestep(double h, double div_v, double c, double speed, double v_sig, const HydroParams& p) {
+  return p.courant_criterion == CourantCriterion::SignalVelocity ? signal_velocity_timestep(h, v_sig, p)
+                                                                 : courant_timestep(h, div_v, c, speed, p);
 }
 
 }  // namespace fountain::hydro

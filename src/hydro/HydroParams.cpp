@@ -12,6 +12,9 @@ HydroParams HydroParams::from(const ParameterFile& p) {
   h.sph_alpha = p.real("hydro.sph_alpha");
   h.viscosity_alpha = p.real("hydro.viscosity_alpha");
   h.courant = p.real("hydro.courant");
+  h.courant_criterion = p.text("time_integration.courant_criterion") == "signal_velocity"
+                            ? CourantCriterion::SignalVelocity
+                            : CourantCriterion::Syw;
   h.msph = p.flag("hydro.msph");
   h.msph_A = p.real("hydro.msph_A");
   h.msph_A_prime = p.real("hydro.msph_A_prime");

@@ -5,6 +5,9 @@ namespace fountain {
 
 class ParameterFile;
 
+// syw: the paper's criterion (GADGET-1 form); signal_velocity: GADGET-2's and SWIFT's.
+enum class CourantCriterion { Syw, SignalVelocity };
+
 struct HydroParams {
   double gamma = 5.0 / 3.0;
   double neighbours = 32.0;
@@ -12,6 +15,7 @@ struct HydroParams {
   double sph_alpha = 1.5;
   double viscosity_alpha = 1.3;
   double courant = 0.1;
+  CourantCriterion courant_criterion = CourantCriterion::Syw;
   bool msph = true;
   double msph_A = 10.0;
   double msph_A_prime = 10.0;

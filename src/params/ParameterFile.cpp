@@ -6,8 +6,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
-#include <sstream>
 
 #include "core/Error.hpp"
 
@@ -85,7 +85,18 @@ std::string check_value(const ParamSpec& spec, const std::string& value, const s
       if (!spec.choices.empty()) {
         bool ok = false;
         for (const auto& c : spec.choices) ok = ok || c == value;
-        if (!ok) throw InputError(fmt::format("{}: key '{}' has unknown value '{}'", where, spec.key, value));
+        if (ok) return value;
+        std::string listed;
+        for (const auto& c : spec.choices) listed += (listed.empty() ? "" : ", ") + c;
+        double v = 0;
+        if (spec.or_number && parse_real(value, v)) {
+          if (out_of_range(v))
+            throw InputError(fmt::format("{}: key '{}' = {} is out of range {} (or one of: {})", where, spec.key, value,
+                                         range_text(), listed));
+          return value;
+        }
+        throw InputError(fmt::format("{}: key '{}' has unknown value '{}' (expected {}{})", where, spec.key, value,
+                                     spec.or_number ? "a number in " + range_text() + " or " : "one of: ", listed));
       }
       return value;
   }
@@ -95,11 +106,20 @@ std::string check_value(const ParamSpec& spec, const std::string& value, const s
 }  // namespace
 
 ParameterFile ParameterFile::load(const std::string& path) {
-  std::ifstream in(path);
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(fmt::format("{}: is a folder, not a parameter file", path));
+  std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(fmt::format("{}: cannot open the parameter file", path));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return parse(ss.str(), path);
+  // Read at most one byte past the cap: a device or a runaway file must not be read for ever.
+  std::string text(kMaxFileBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) throw InputError(fmt::format("{}: cannot read the parameter file", path));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxFileBytes)
+    throw InputError(fmt::format("{}: the parameter file is larger than {} MiB; a parameter file is a few kB of YAML",
+                                 path, kMaxFileBytes >> 20));
+  return parse(text, path);
 }
 
 ParameterFile ParameterFile::parse(const std::string& yaml_text, const std::string& origin) {
@@ -127,7 +147,7 @@ ParameterFile ParameterFile::parse(const std::string& yaml_text, const std::stri
         throw InputError(fmt::format("{}: key '{}' must be a single value", where, key));
       if (pf.given_.count(key)) throw InputError(fmt::format("{}: key '{}' is given twice", where, key));
       pf.values_[key] = check_value(*spec, entry.second.Scalar(), where);
-      pf.given_[key] = true;
+      pf.given_[key] = entry.first.Mark().line + 1;
     }
   }
   for (const auto& spec : parameter_schema()) {
@@ -137,6 +157,18 @@ ParameterFile ParameterFile::parse(const std::string& yaml_text, const std::stri
     pf.values_[spec.key] = check_value(spec, *spec.default_value, origin + " (default)");
   }
   return pf;
+}
+
+std::string ParameterFile::check(const std::string& key, const std::string& value, const std::string& where) {
+  const ParamSpec* s = find_spec(key);
+  if (!s) throw std::logic_error("parameter '" + key + "' is not in the schema");
+  return check_value(*s, value, where);
+}
+
+std::string ParameterFile::where(const std::string& key) const {
+  const auto it = given_.find(key);
+  return it == given_.end() ? fmt::format("{}: key '{}' (default)", origin_, key)
+                            : fmt::format("{}:{}: key '{}'", origin_, it->second, key);
 }
 
 const ParamSpec& ParameterFile::spec(const std::string& key) const {

@@ -1,5 +1,6 @@
 // A parsed, validated YAML parameter file: every key checked against the schema before use.
 #pragma once
+#include <cstddef>
 #include <map>
 #include <string>
 
@@ -14,12 +15,21 @@ class ParameterFile {
   static ParameterFile load(const std::string& path);
   // Same, from text (for tests and for restart files); `origin` names it in messages.
   static ParameterFile parse(const std::string& yaml_text, const std::string& origin);
+  // Checks one value of `key` as a file's value is checked (type and range), for a value that
+  // comes from elsewhere (a command-line option); `where` names that place in the message.
+  static std::string check(const std::string& key, const std::string& value, const std::string& where);
 
   double real(const std::string& key) const;
   long long integer(const std::string& key) const;
   bool flag(const std::string& key) const;
   const std::string& text(const std::string& key) const;
   bool was_given(const std::string& key) const { return given_.count(key) != 0; }
+  // "FILE:LINE: key 'KEY'" for a key the file gives, "FILE: key 'KEY' (default)" otherwise:
+  // the prefix of a message about a value that passed its own range but not a rule with others.
+  std::string where(const std::string& key) const;
+
+  // A parameter file is a few kB; a larger one is refused before it is read whole.
+  static constexpr std::size_t kMaxFileBytes = std::size_t{16} << 20;
 
   // Every key with the value in force (given or default), as YAML text.
   std::string used_as_yaml() const;
@@ -30,7 +40,7 @@ class ParameterFile {
   const ParamSpec& spec(const std::string& key) const;
   std::string origin_;
   std::map<std::string, std::string> values_;  // canonical text of each value in force
-  std::map<std::string, bool> given_;
+  std::map<std::string, int> given_;  // the line of each key the file gives
 };
 
 }  // namespace fountain

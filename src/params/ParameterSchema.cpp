@@ -23,6 +23,12 @@ ParamSpec text(std::string key, std::optional<std::string> def, std::string doc,
   return {std::move(key), ParamKind::Text, std::move(def), -inf, inf, false, std::move(doc),
           std::move(choices)};
 }
+ParamSpec choice_or_number(std::string key, std::string def, std::vector<std::string> choices, double lo, double hi,
+                           std::string doc) {
+  ParamSpec p{std::move(key), ParamKind::Text, std::move(def), lo, hi, false, std::move(doc), std::move(choices)};
+  p.or_number = true;
+  return p;
+}
 }  // namespace
 
 const std::vector<ParamSpec>& parameter_schema() {
@@ -86,7 +92,8 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("gravity.eta", "0.08", 0, 10, "Gravitational timestep dt = sqrt(2 eta eps / |a|).", true),
       // cooling
       boolean("cooling.enabled", "false", "Optically thin radiative cooling from the Sutherland & Dopita (1993) CIE tables, implicit per particle."),
-      text("cooling.metallicity", "primordial", "Gas metallicity: 'primordial' or [Fe/H] between -3 and 0.5 (the paper tracks no enrichment)."),
+      choice_or_number("cooling.metallicity", "primordial", {"primordial"}, -3, 0.5,
+                       "Gas metallicity: 'primordial' or [Fe/H] between -3 and 0.5 (the paper tracks no enrichment)."),
       text("cooling.table_directory", "", "Folder of the SD93 .cie tables; empty uses the copy shipped in data/cooling/sutherland_dopita_1993."),
       real("cooling.hydrogen_fraction", "0.76", 0, 1, "Hydrogen mass fraction X (n_H = X rho / m_p).", true),
       // star formation
@@ -107,13 +114,19 @@ const std::vector<ParamSpec>& parameter_schema() {
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),
+      text("time_integration.courant_criterion", "syw",
+           "syw: the paper's Courant criterion, dt = alpha_c h / (h |div v| + max(c, |v|) (1 + 0.6 alpha_v)); "
+           "signal_velocity: GADGET-2's and SWIFT's, dt = C h / v_sig,max with v_sig,ij = c_i + c_j - 3 min(0, "
+           "v_ij.r_ij / r_ij) over the force loop's pairs and C = 2 alpha_c / (1 + 0.6 alpha_v), so that both give "
+           "the same step to gas at rest (alpha_c: hydro.courant).",
+           {"syw", "signal_velocity"}),
       boolean("time_integration.timestep_limiter", "true",
               "Keep every particle's step within a factor of its neighbours' and wake sleeping neighbours of short-step particles (beyond the paper; false for paper-faithful runs)."),
       integer("time_integration.limiter_bin_difference", "2", 1, 10,
               "Largest difference of time bins between neighbours under the limiter: 2 allows steps 4x a neighbour's, 1 allows 2x."),
       // space
       integer("space.cell_split_size", "256", 8, 1e6, "Octree cells with more particles than this are split."),
-      integer("space.top_cells", "0", 0, 256, "Top-level cells along the longest box side; 0 chooses from the particle number."),
+      integer("space.top_cells", "0", 0, 128, "Top-level cells along the longest box side; 0 chooses from the particle number. At most one top cell per particle (or 64 in all) is allowed."),
       real("space.rebuild_skin", "0.25", 0, 10,
            "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),
       // domain decomposition (MPI)
@@ -152,6 +165,7 @@ std::string parameter_reference_markdown() {
                             has_hi ? fmt::format("{:g}", p.max) : "inf");
     } else if (!p.choices.empty()) {
       for (const auto& c : p.choices) range += (range.empty() ? "" : ", ") + c;
+      if (p.or_number) range += fmt::format(", or [{:g}, {:g}]", p.min, p.max);
     }
     out += fmt::format("| `{}` | {} | {} | {} | {} |\n", p.key.substr(dot + 1), kind,
                        p.default_value ? "`" + *p.default_value + "`" : "**required**", range, p.doc);

@@ -18,6 +18,7 @@ struct ParamSpec {
   bool min_exclusive = false;
   std::string doc;
   std::vector<std::string> choices;       // for Text keys with a fixed set of values
+  bool or_number = false;                 // Text: one of `choices`, or a number in [min, max]
 };
 
 // All keys Fountain knows; the one place a new key is declared.

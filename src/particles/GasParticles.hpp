@@ -60,6 +60,7 @@ struct GasParticles {
   std::vector<Vec3> a_hydro;
   std::vector<double> du_dt;
   std::vector<double> du_dt_cool;     // the part of du_dt that is radiative cooling (<= 0)
+  std::vector<double> v_sig;          // largest signal velocity over the force loop's pairs (>= 2c)
 
   // Gravity (zero when gravity is off): acceleration and specific potential at the last
   // force computation.
@@ -83,7 +84,7 @@ struct GasParticles {
     rho_msph.resize(n); h_msph.resize(n);
     wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
     soundspeed.resize(n); p_over_rho_a.resize(n); inv_rho_2ma.resize(n); balsara.resize(n);
-    a_hydro.resize(n); du_dt.resize(n); du_dt_cool.resize(n); a_grav.resize(n); potential.resize(n);
+    a_hydro.resize(n); du_dt.resize(n); du_dt_cool.resize(n); v_sig.resize(n); a_grav.resize(n); potential.resize(n);
     time_bin.resize(n);
     ti_begin.resize(n);
     courant_bin.resize(n);
@@ -98,7 +99,7 @@ struct GasParticles {
     f(id); f(mass); f(mass_initial); f(mass_stars_hidden); f(reservoir); f(promoted); f(promotion_time);
     f(feedback_hot_energy); f(x); f(v_full); f(u_full); f(v); f(u); f(h); f(rho); f(rho_msph); f(h_msph);
     f(wcount); f(wcount_dh); f(div_v); f(curl_v); f(soundspeed); f(p_over_rho_a); f(inv_rho_2ma); f(balsara);
-    f(a_hydro); f(du_dt); f(du_dt_cool); f(a_grav); f(potential); f(time_bin); f(ti_begin); f(courant_bin);
+    f(a_hydro); f(du_dt); f(du_dt_cool); f(v_sig); f(a_grav); f(potential); f(time_bin); f(ti_begin); f(courant_bin);
     f(limit_bin); f(wake_bin);
   }
 

@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <functional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "core/ForEach.hpp"
@@ -19,6 +20,7 @@ struct SpaceConfig {
   Vec3 box_size;            // periodic box (ignored for open boundaries)
   int split_size = 256;     // octree leaves hold at most this many particles
   int top_cells = 0;        // top-level cells along the longest side; 0 = automatic
+  std::string top_cells_origin = "key 'space.top_cells'";  // where it was set, for messages
   double skin = 0.25;       // leaves cover (1 + skin) h_max
 };
 
@@ -96,6 +98,8 @@ class Space {
   // The top-level grid's indices along axis k whose cells may lie within `reach` of cell a's
   // box, ascending.
   static constexpr int kMaxTopPerAxis = 128;
+  // space.top_cells may ask for this many top cells whatever the particle number.
+  static constexpr std::size_t kFewestTopCellsAllowed = 64;
   struct TopRange {
     std::array<int, kMaxTopPerAxis> index;
     int count = 0;

@@ -16,7 +16,9 @@ namespace fountain {
 
 int StepContext::courant_bin(std::size_t i) const {
   const double cs = hydro::sound_speed(gas.rho[i], gas.u[i], hydro.gamma);
-  const double dt = hydro::courant_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), hydro);
+  // Before this step's force loop: the signal velocity is the last force loop's.
+  const double dt =
+      hydro::hydro_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), std::max(gas.v_sig[i], 2.0 * cs), hydro);
   const int bin = std::min({timeline.bin_for(dt), timeline.bin_for(integration.dt_max),
                             TimeLine::largest_aligned_bin(ti_current)});
   return std::max(bin, 0);
@@ -38,6 +40,11 @@ double kicked_energy(const StepContext& ctx, double u, double du_dt, double dt) 
 double gravity_timestep(const GravityParams& g, double softening, const Vec3& a) {
   const double a_norm = norm(a);
   return a_norm > 0.0 ? std::sqrt(2.0 * g.eta * softening / a_norm) : std::numeric_limits<double>::infinity();
+}
+
+std::string tick_text(const TimeLine& t) {
+  return fmt::format("{:.4g}: the run from t = {:g} to run.t_end = {:g} is cut into 2^{} ticks", t.time_base(), t.t_begin,
+                     t.t_end, TimeLine::max_bin);
 }
 
 }  // namespace
@@ -138,7 +145,7 @@ void timestep(StepContext& ctx, int c) {
                                      gas.id[i], ctx.timeline.time(ctx.ti_current), rho, u,
                                      gas.du_dt[i], norm(gas.a_hydro[i])));
       const double cs = hydro::sound_speed(rho, u, p.gamma);
-      double dt = hydro::courant_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), p);
+      double dt = hydro::hydro_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), gas.v_sig[i], p);
       if (ctx.gravity.enabled)
         dt = std::min(dt, gravity_timestep(ctx.gravity, ctx.gravity.softening_gas, gas.a_hydro[i] + gas.a_grav[i]));
       if (dt < ctx.integration.dt_min)
@@ -149,8 +156,9 @@ void timestep(StepContext& ctx, int c) {
       gas.limit_bin[i] = kNoBin;
       gas.ti_begin[i] = ctx.ti_current;
       if (bin < 0)
-        throw InputError(fmt::format("gas particle id {} needs a timestep {} shorter than one tick of the timeline",
-                                     gas.id[i], dt));
+        throw InputError(fmt::format("gas particle id {} needs a timestep {} at t = {}, shorter than one tick of the "
+                                     "timeline ({})",
+                                     gas.id[i], dt, ctx.timeline.time(ctx.ti_current), tick_text(ctx.timeline)));
       gas.time_bin[i] = static_cast<TimeBin>(bin);
     }
     ti_end_min = std::min(ti_end_min, TimeLine::step_end(gas.time_bin[i], ctx.ti_current));
@@ -169,8 +177,10 @@ void timestep(StepContext& ctx, int c) {
       // Without gravity (stars spawned in a hydro-only run) nothing limits the step but dt_max.
       const int bin = std::isfinite(dt) ? std::min(ctx.timeline.bin_for(dt), max_bin) : max_bin;
       if (bin < 0)
-        throw InputError(fmt::format("{} particle id {} needs a timestep {} shorter than one tick of the timeline",
-                                     species_name(dm.species[i]), dm.id[i], dt));
+        throw InputError(fmt::format("{} particle id {} needs a timestep {} at t = {}, shorter than one tick of the "
+                                     "timeline ({})",
+                                     species_name(dm.species[i]), dm.id[i], dt, ctx.timeline.time(ctx.ti_current),
+                                     tick_text(ctx.timeline)));
       dm.time_bin[i] = static_cast<TimeBin>(bin);
       dm.ti_begin[i] = ctx.ti_current;
     }

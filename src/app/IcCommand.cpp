@@ -1,0 +1,116 @@
+#include "app/IcCommand.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <type_traits>
+#include <fstream>
+#include <sstream>
+
+#include <unistd.h>
+
+#include "core/Error.hpp"
+#include "ics/TestProblems.hpp"
+#include "io/InitialConditions.hpp"
+#include "particles/GasParticles.hpp"
+
+namespace fountain {
+
+namespace {
+
+int default_resolution(const std::string& problem) {
+  if (problem == "sod") return 32;
+  if (problem == "sedov") return 24;
+  if (problem == "evrard") return 8;
+  if (problem == "gresho") return 32;
+  return 4000;  // sphere: particles per species
+}
+
+int resolution_of(const IcRequest& r) { return r.resolution_given ? r.resolution : default_resolution(r.problem); }
+
+std::string bytes_text(double b) {
+  const char* unit[] = {"B", "kB", "MB", "GB", "TB", "PB"};
+  int k = 0;
+  while (b >= 1000.0 && k < 5) b /= 1000.0, ++k;
+  return fmt::format("{:.3g} {}", b, unit[k]);
+}
+
+}  // namespace
+
+double ic_particle_count(const IcRequest& r) {
+  const double n = resolution_of(r);
+  // Two points per BCC cell; cells along each side as the generators lay them.
+  if (r.problem == "sod") return 2.0 * (n * (n / 2) * (n / 2)) + 2.0 * ((n / 2) * (n / 4) * (n / 4));
+  if (r.problem == "sedov") return 2.0 * n * n * n;
+  if (r.problem == "gresho") return 2.0 * n * n * (n / 2);
+  if (r.problem == "evrard") return (4.0 / 3.0) * M_PI * n * n * n;  // the cube of side 2n cut to the ball
+  return 2.0 * n;                                                    // sphere: gas + dark matter
+}
+
+std::size_t ic_bytes_per_particle() {
+  std::size_t bytes = 0;
+  GasParticles one;
+  one.for_each_field([&](auto& field) { bytes += sizeof(typename std::decay_t<decltype(field)>::value_type); });
+  // The lattice point (and its stretched copy) and the writer's gathered datasets.
+  return bytes + 2 * sizeof(Vec3) + 64;
+}
+
+double available_memory_bytes() {
+  std::ifstream meminfo("/proc/meminfo");
+  std::string line;
+  while (std::getline(meminfo, line)) {
+    std::istringstream in(line);
+    std::string key;
+    double kb = 0;
+    if (in >> key >> kb && key == "MemAvailable:") return kb * 1024.0;
+  }
+  return static_cast<double>(::sysconf(_SC_PHYS_PAGES)) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+}
+
+void check_ic_request(const IcRequest& r, double memory_bytes) {
+  if (r.resolution_given && r.resolution <= 0)
+    throw InputError(fmt::format("option -n,--resolution = {} must be a positive number of lattice cells{}",
+                                 r.resolution, r.problem == "sphere" ? " (sphere: particles per species)" : ""));
+  if (r.problem == "evrard" && r.resolution_given && r.resolution < 2)
+    throw InputError(fmt::format("option -n,--resolution = {}: the Evrard sphere needs at least 2 cells per radius",
+                                 r.resolution));
+  if (r.problem == "sphere" && r.resolution_given && r.resolution < 8)
+    throw InputError(fmt::format("option -n,--resolution = {}: the sphere needs at least 8 particles per species",
+                                 r.resolution));
+  if (!(std::isfinite(r.gamma) && r.gamma > 1.0 && r.gamma <= 3.0))
+    throw InputError(fmt::format("option --gamma = {} must be a finite adiabatic index in (1, 3] "
+                                 "(the parameter file's hydro.gamma takes the same range)",
+                                 r.gamma));
+  const double count = ic_particle_count(r);
+  const double need = count * static_cast<double>(ic_bytes_per_particle());
+  if (!(need <= memory_bytes))
+    throw InputError(fmt::format("ic {} -n {} would make about {:.3g} particles, needing about {} of memory; "
+                                 "this machine has {} available: choose a smaller -n",
+                                 r.problem, resolution_of(r), count, bytes_text(need), bytes_text(memory_bytes)));
+}
+
+std::string write_ic(const IcRequest& r) {
+  check_ic_request(r, available_memory_bytes());
+  const int n = resolution_of(r);
+  if (r.problem == "sphere") {
+    ics::RotatingSphereParams sphere = r.sphere;
+    sphere.particles_per_species = n;
+    const ics::RotatingSphereIC s = ics::rotating_sphere(sphere);
+    // Isolated: centred on the origin; BoxSize is the enclosing cube's side (informative).
+    const double side = 2.0 * sphere.radius;
+    io::write_initial_conditions(r.output, s.gas, s.dm, {side, side, side}, false);
+    return fmt::format("wrote {} ({} gas + {} dark matter particles; omega = {:.6g} km/s per Mpc/h, u = {:.6g} "
+                       "(km/s)^2, W = {:.6g}, spin = {:.6g})",
+                       r.output, s.gas.size(), s.dm.size(), s.omega, s.u, s.potential_energy, s.spin);
+  }
+  ics::ProblemIC p;
+  if (r.problem == "sod") p = ics::sod_shock(n, r.gamma);
+  else if (r.problem == "sedov") p = ics::sedov_blast(n, r.gamma);
+  else if (r.problem == "evrard") p = ics::evrard_sphere(n);
+  else p = ics::gresho_vortex(n, r.gamma);
+  io::write_initial_conditions(r.output, p.gas, p.box_size, p.periodic);
+  return fmt::format("wrote {} ({} gas particles, box {} x {} x {})", r.output, p.gas.size(), p.box_size.x,
+                     p.box_size.y, p.box_size.z);
+}
+
+}  // namespace fountain
