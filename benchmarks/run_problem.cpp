@@ -1,6 +1,6 @@
 // Whole-run benchmark of a standard hydro problem: wall time, step costs, parallel share,
 // peak memory and accuracy, written as JSON. Usage: fountain_run_bench sod|sedov|gresho
-// [--threads N] [--resolution N] [--json FILE] [--step-log FILE]
+// [--threads N] [--resolution N] [--courant-criterion syw|signal_velocity] [--json FILE] [--step-log FILE]
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -43,6 +43,9 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--repartition-imbalance", repartition_imbalance, "domain.repartition_imbalance (across ranks)");
   long long repartition_min_steps = RunConfig{}.repartition_min_steps;
   app.add_option("--repartition-min-steps", repartition_min_steps, "domain.repartition_min_steps (across ranks)");
+  std::string criterion = "syw";
+  app.add_option("--courant-criterion", criterion, "time_integration.courant_criterion")
+      ->check(CLI::IsMember({"syw", "signal_velocity"}));
   app.add_option("--json", json_path);
   std::string step_log_path;
   app.add_option("--step-log", step_log_path,
@@ -72,6 +75,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.hydro.neighbours_tolerance = neighbours_tolerance;
   c.hydro.msph = false;
   c.hydro.limiter_bins = 1;
+  c.hydro.courant_criterion =
+      criterion == "signal_velocity" ? CourantCriterion::SignalVelocity : CourantCriterion::Syw;
   c.integration.dt_min = 1e-12;
   c.integration.dt_max = dt_max;
   c.space.periodic = true;
@@ -137,11 +142,12 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   }
   const double per_particle_us = full_steps > 0 ? 1e6 * full_step_s / full_steps / static_cast<double>(n) : 0.0;
   const std::string json = fmt::format(
-      "{{\"problem\": \"{}\", \"particles\": {}, \"threads\": {}, \"neighbours\": {}, \"t_end\": {}, "
+      "{{\"problem\": \"{}\", \"courant_criterion\": \"{}\", \"particles\": {}, \"threads\": {}, \"neighbours\": {}, "
+      "\"t_end\": {}, "
       "\"wall_s\": {:.3f}, \"steps\": {}, \"full_steps\": {}, \"full_step_us_per_particle\": {:.4f}, "
       "\"updates_per_s\": {:.4g}, \"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, "
       "{}, {}}}\n",
-      problem, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
+      problem, criterion, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
       tasks_wall > 0 ? tasks_busy / (tasks_wall * e.threads()) : 0.0, peak_bytes / static_cast<double>(n), accuracy, ranks);
   if (mpi.rank() == 0) {
     fmt::print("{}", json);

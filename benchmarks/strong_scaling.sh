@@ -4,9 +4,9 @@
 # benchmarks/results/scaling_<problem>_<ranks>x<threads>.json, then the table
 # (python3 benchmarks/scaling_report.py). Problems: the 250k-particle Sedov blast (the
 # engine benchmark's, run to SEDOV_T_END) and the 8000-per-species rotating sphere with star
-# formation and MFB feedback on (to SPHERE_T_END). The Sedov run goes to t = 0.05, as the
-# engine issue defines that benchmark (840 steps); SEDOV_T_END=0.01 gives its first 356
-# steps, the run of the tables before 2026-11-24's twelfth session. PIN=1 pins every task
+# formation and MFB feedback on (to SPHERE_T_END). The Sedov run goes to t = 0.05, the
+# benchmark's end (840 steps); SEDOV_T_END=0.01 gives its first 356 steps, the span of the
+# older tables in docs/performance.md. PIN=1 pins every task
 # thread to a core (--pin, run.pin_threads).
 # The host's own step-to-step difference between its cores goes with the table, since a 2 x 1
 # run pays it and a 1 x 2 run does not: the Sedov 2 x 1 runs log their steps, and the last

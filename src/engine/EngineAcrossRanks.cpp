@@ -184,7 +184,7 @@ void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured)
   // the last recut, a core slowed by the host for a while made the cut follow it (Sedov 250k,
   // 2 ranks: 12-14 cuts, each with a migration), and a cut made from the first steps' work
   // left the ranks 12% apart for the rest of the run, where the symmetric cut from particle
-  // counts was even (docs/performance.md, sixteenth session).
+  // counts was even (docs/performance.md, domain.repartition_min_steps).
   std::vector<int> leaf_owner;
   if (cut_keys_.size() == static_cast<std::size_t>(n - 1)) {
     leaf_owner = owners_from_cuts();

@@ -25,7 +25,7 @@ constexpr Real pair_inverse_spline_length(Real h_inv_i, Real h_inv_j) {
   return std::min(h_inv_i, h_inv_j);
 }
 
-// The hook for a TreePM short-range force. Today it is the identity: the tree computes the
+// The hook for a TreePM short-range force. For now it is the identity: the tree computes the
 // whole force. TreePM will multiply the softened pair force by
 // erfc(r / 2 r_s) + (r / r_s sqrt(pi)) exp(-r^2 / 4 r_s^2) and the potential by
 // erfc(r / 2 r_s) (GADGET-2's `shortrange_table`, tabulated there in u = r / 2 r_s), and

@@ -61,8 +61,8 @@ const std::vector<ParamSpec>& parameter_schema() {
               "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never."),
       // restart
       integer("restart.every_steps", "0", 0, 1e15,
-              "Write <output.directory>/restart.hdf5 every this many steps, at the next recut of the cells (so writing changes nothing in the run); 0 never (SIGTERM always writes one)."),
-      real("restart.every_minutes", "0", 0, inf, "Also write it (at the next recut) when this many minutes of wall time have passed since the last; 0 never."),
+              "A restart file <output.directory>/restart.hdf5 falls due every this many steps; it is written at the next recut of the cells after that (a few to a few tens of steps later, so writing it changes nothing in the run; if none comes within 1000 steps the cells are recut for it). The first is written at the start. 0: never (SIGTERM always writes one)."),
+      real("restart.every_minutes", "0", 0, inf, "A restart file also falls due when this many minutes of wall time have passed since the last (written as for every_steps); 0 never."),
       // units
       real("units.length_cgs", "3.0856775814913673e24", 0, inf, "Internal length unit in cm (default Mpc).", true),
       real("units.mass_cgs", "1.988409870698051e33", 0, inf, "Internal mass unit in g (default Msun).", true),
