@@ -60,7 +60,12 @@ OutputFolderLock::OutputFolderLock(const std::string& directory) : path_((fs::pa
         throw InputError(fmt::format("output directory '{}' is in use by another run ({}; lock file {}): wait for "
                                      "it to end, or give this run another output.directory",
                                      directory, holder.empty() ? "holder unknown" : holder, path_));
-      throw InputError(fmt::format("output directory '{}': cannot lock {}: {}", directory, path_, std::strerror(err)));
+      // A file system without flock (some parallel ones are mounted so): the run goes on,
+      // unguarded, and says so.
+      unsupported_ = fmt::format("cannot lock {} ({}): nothing keeps a second run out of this folder", path_,
+                                 std::strerror(err));
+      if (holder.empty()) ::unlink(path_.c_str());  // the empty file this run made
+      return;
     }
     if (same_file(fd_, path_)) break;
     ::close(fd_);
@@ -69,9 +74,13 @@ OutputFolderLock::OutputFolderLock(const std::string& directory) : path_((fs::pa
   if (fd_ < 0) throw InputError(fmt::format("output directory '{}': cannot take the lock {}", directory, path_));
   stale_holder_ = read_all(fd_);
   const std::string me = fmt::format("PID {} on host {}\n", static_cast<long>(::getpid()), this_host());
-  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, me.data(), me.size(), 0) != static_cast<ssize_t>(me.size()))
+  if (::ftruncate(fd_, 0) != 0 || ::pwrite(fd_, me.data(), me.size(), 0) != static_cast<ssize_t>(me.size())) {
+    const int err = errno;
+    ::close(fd_);  // the destructor does not run for a constructor that throws
+    fd_ = -1;
     throw InputError(fmt::format("output directory '{}': cannot write the lock file {}: {}", directory, path_,
-                                 std::strerror(errno)));
+                                 std::strerror(err)));
+  }
 }
 
 OutputFolderLock::~OutputFolderLock() {

@@ -18,11 +18,14 @@ class OutputFolderLock {
   OutputFolderLock& operator=(const OutputFolderLock&) = delete;
   // The holder named by a stale lock this one replaced ("" when there was none).
   const std::string& stale_holder() const { return stale_holder_; }
+  // Why the folder could not be locked, on a file system without flock ("" when locked).
+  const std::string& unsupported() const { return unsupported_; }
 
  private:
   std::string path_;
   int fd_ = -1;
   std::string stale_holder_;
+  std::string unsupported_;
 };
 
 // Whether `file` is one a run with this folder and snapshot basename writes (a snapshot, a

@@ -184,6 +184,7 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   std::unique_ptr<OutputFolderLock> lock;
   if (options.rank == 0) {
     lock = std::make_unique<OutputFolderLock>(config.output.directory);
+    if (!lock->unsupported().empty()) fmt::print(stderr, "warning: {}\n", lock->unsupported());
     if (!lock->stale_holder().empty())
       fmt::print(stderr, "note: took over the lock of {} left by a run that did not end ({})\n",
                  config.output.directory, lock->stale_holder());
