@@ -6,7 +6,8 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
-#include <regex>
+#include <initializer_list>
+#include <string_view>
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -91,24 +92,33 @@ OutputFolderLock::~OutputFolderLock() {
 
 namespace {
 
-bool is_snapshot_name(const std::string& basename, const std::string& name) {
-  const std::string prefix = basename + "_", suffix = ".hdf5";
-  if (name.size() < prefix.size() + 4 + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
-      name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
-    return false;
-  return std::all_of(name.begin() + static_cast<std::ptrdiff_t>(prefix.size()),
-                     name.end() - static_cast<std::ptrdiff_t>(suffix.size()), [](char c) { return c >= '0' && c <= '9'; });
+// Whether `name` matches `pattern`, in which '#' stands for one or more digits (std::regex
+// would do, but GCC 12 warns inside it under the sanitizers).
+bool matches_pattern(std::string_view name, std::string_view pattern) {
+  if (pattern.empty()) return name.empty();
+  if (pattern.front() != '#') return !name.empty() && name.front() == pattern.front() &&
+                                    matches_pattern(name.substr(1), pattern.substr(1));
+  std::size_t digits = 0;
+  while (digits < name.size() && name[digits] >= '0' && name[digits] <= '9') ++digits;
+  for (std::size_t k = digits; k >= 1; --k)
+    if (matches_pattern(name.substr(k), pattern.substr(1))) return true;
+  return false;
 }
 
-bool is_restart_name(const std::string& name) {
-  static const std::regex restart(R"(restart(_[0-9]+_rank[0-9]+)?\.hdf5)");
-  return std::regex_match(name, restart);
+bool matches_any(std::string_view name, std::initializer_list<std::string_view> patterns) {
+  return std::any_of(patterns.begin(), patterns.end(), [&](std::string_view p) { return matches_pattern(name, p); });
 }
+
+bool is_snapshot_name(const std::string& basename, const std::string& name) {
+  return name.size() > basename.size() && name.compare(0, basename.size(), basename) == 0 &&
+         matches_pattern(std::string_view(name).substr(basename.size()), "_#.hdf5");
+}
+
+bool is_restart_name(const std::string& name) { return matches_any(name, {"restart.hdf5", "restart_#_rank#.hdf5"}); }
 
 bool is_dump_name(const std::string& name) {
-  static const std::regex dumps(
-      R"(task_graph(_rank[0-9]+)?\.dot|dependency_graph_[0-9]+\.csv|timeline_step[0-9]+(_rank[0-9]+)?\.csv)");
-  return std::regex_match(name, dumps);
+  return matches_any(name, {"task_graph.dot", "task_graph_rank#.dot", "dependency_graph_#.csv", "timeline_step#.csv",
+                            "timeline_step#_rank#.csv"});
 }
 
 bool matches_output_name(const std::string& basename, const std::string& name) {
