@@ -43,6 +43,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--repartition-imbalance", repartition_imbalance, "domain.repartition_imbalance (across ranks)");
   long long repartition_min_steps = RunConfig{}.repartition_min_steps;
   app.add_option("--repartition-min-steps", repartition_min_steps, "domain.repartition_min_steps (across ranks)");
+  double courant = HydroParams{}.courant;
+  app.add_option("--courant", courant, "hydro.courant (alpha_c)");
   std::string criterion = "syw";
   app.add_option("--courant-criterion", criterion, "time_integration.courant_criterion")
       ->check(CLI::IsMember({"syw", "signal_velocity"}));
@@ -75,6 +77,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.hydro.neighbours_tolerance = neighbours_tolerance;
   c.hydro.msph = false;
   c.hydro.limiter_bins = 1;
+  c.hydro.courant = courant;
   c.hydro.courant_criterion =
       criterion == "signal_velocity" ? CourantCriterion::SignalVelocity : CourantCriterion::Syw;
   c.integration.dt_min = 1e-12;

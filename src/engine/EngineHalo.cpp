@@ -53,9 +53,10 @@ void Engine::exchange_with_ranks(const std::function<void(int, MessageWriter&)>&
 }
 
 void Engine::share_recut_inputs() {
-  // The recut reads positions, h and v_full of every particle, and the rebuild then the time
-  // bins: every rank must see the owners' values to cut the same cells. A rank that holds a
-  // leaf has them already, current; only the others are sent it.
+  // The recut reads the positions and h of every particle: every rank must see the owners'
+  // values to cut the same cells (what the rebuild reads besides, the leaves' v_max and step
+  // ends, combine_recut_records settles). A rank that holds a leaf has them already, current;
+  // only the others are sent it.
   exchange_with_ranks(
       [&](int q, MessageWriter& w) {
         for (int c : space_.leaves())
