@@ -140,7 +140,7 @@ TEST(Reproducibility, BitwiseIdenticalOnOneAndTwoThreads) {
 }
 
 // Evrard (1988) collapse with self-gravity, in its usual units (G = M = R = 1). SWIFT drifts
-// 6e-4 in total energy by t = 0.8 at 20k particles; the bound here is the engine issue's 1%
+// 6e-4 in total energy by t = 0.8 at 20k particles; the bound here is 1% of the total energy
 // to t = 3, at ~2,200 particles so the test stays fast.
 TEST(EvrardCollapse, EnergyAndMomentumConserved) {
   const auto ic = ics::evrard_sphere(8);

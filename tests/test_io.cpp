@@ -585,7 +585,7 @@ TEST_F(IoTest, SnapshotContent) {
 }
 
 // Particles drift out of a periodic box between the recuts that fold them back: a snapshot
-// stores each one's image in [0, L), including values a hair outside (the issue's -2e-25 and
+// stores each one's image in [0, L), including values a hair outside (-2e-25 and
 // 1 + 1.9e-12 in a box of 1), and leaves an open box's positions as they are.
 TEST_F(IoTest, SnapshotOfAPeriodicBoxHoldsPositionsInsideIt) {
   GasParticles gas = make_gas(4, 5);
