@@ -190,17 +190,26 @@ sys.exit(0 if t0 == 0.5 else 1)" || fail "the run did not start at the initial c
     # step's log line gives the step's true start and length.
     extra="restart:
   every_steps: 4"
-    params good.hdf5 outA 0.03 "$extra"; cp params.yml paramsA.yml
-    params good.hdf5 outB 0.03 "$extra"; cp params.yml paramsB.yml
+    OUTPUT_KEYS="  delta_time: 0.008" params good.hdf5 outA 0.03 "$extra"; cp params.yml paramsA.yml
+    OUTPUT_KEYS="  delta_time: 0.008" params good.hdf5 outB 0.03 "$extra"; cp params.yml paramsB.yml
     "$bin" run paramsA.yml > runA.txt 2>&1 || { cat runA.txt; fail "uninterrupted run"; }
     "$bin" run paramsB.yml --abandon-after-steps 2 > runB.txt 2>&1 || { cat runB.txt; fail "run B"; }
     grep -q "restart file outB/restart.hdf5 at step 0" runB.txt || { cat runB.txt; fail "no restart file at the start"; }
     "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart from step 0"; }
-    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
+    for f in outA/snapshot_*.hdf5; do "$python" "$root/tests/compare_snapshots.py" "$f" "outB/${f#outA/}"; done
     rm -rf outB
-    "$bin" run paramsB.yml --abandon-after-steps 30 > runB.txt 2>&1 || { cat runB.txt; fail "run B"; }
+    "$bin" run paramsB.yml --abandon-after-steps 13 > runB.txt 2>&1 || { cat runB.txt; fail "run B"; }
+    # The last restart file was written inside step 13, which ends at the first output time: a
+    # kill after it and before that snapshot leaves no snapshot_0001, which the restarted run
+    # must write.
+    grep -q "restart file outB/restart.hdf5 at step 12" runB.txt || { cat runB.txt; fail "test set-up: restart points moved"; }
+    grep "^step *13 " runB.txt | grep -q "t = 0.008 " || fail "test set-up: step 13 no longer ends at an output"
+    rm outB/snapshot_0001.hdf5
     "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart"; }
     head -2 restart.txt
+    # The same snapshots, each at its time: none passed over, none written twice.
+    [ "$(ls outA)" = "$(ls outB)" ] || { ls outA outB; fail "the restarted run wrote other files"; }
+    for f in outA/snapshot_*.hdf5; do "$python" "$root/tests/compare_snapshots.py" "$f" "outB/${f#outA/}"; done
     step=$(sed -n 's/^restarted from .* at t = \(.*\), step \([0-9]*\)$/\2/p' restart.txt)
     t_restart=$(sed -n 's/^restarted from .* at t = \(.*\), step \([0-9]*\)$/\1/p' restart.txt)
     [ -n "$step" ] || fail "no restart line"
@@ -211,7 +220,7 @@ sys.exit(0 if t0 == 0.5 else 1)" || fail "the run did not start at the initial c
     lineA=$(grep "^step *$next " runA.txt | sed 's/wall = .*//; s/rebuilt//; s/  */ /g')
     lineR=$(grep "^step *$next " restart.txt | sed 's/wall = .*//; s/rebuilt//; s/  */ /g')
     [ "$lineA" = "$lineR" ] || fail "step $next after the restart: '$lineR', uninterrupted: '$lineA'"
-    "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0001.hdf5 outB/snapshot_0001.hdf5 ;;
+    for f in outA/snapshot_*.hdf5; do "$python" "$root/tests/compare_snapshots.py" "$f" "outB/${f#outA/}"; done ;;
   every_ic_problem_opens_in_yt)
     # Every problem `fountain ic` makes gives snapshots that yt opens (a non-cubic box too,
     # through scripts/fountain_yt.py).

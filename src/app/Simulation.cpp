@@ -352,9 +352,10 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   };
   IntegerTime ti_out = next_output_ticks();
   // Never a step of length zero, never two snapshots at one time: an output time at or
-  // before the present (the first one after a restart, say) is passed over.
+  // before the end of the last step done is passed over. (A restart from inside a step stands
+  // at that step's end but redoes it: an output at its end is still to be written.)
   auto skip_past_outputs = [&] {
-    while (ti_out <= engine.ti_current() && ti_out < TimeLine::ticks) {
+    while (ti_out <= engine.ti_step_begin() && ti_out < TimeLine::ticks) {
       ++next_output;
       ti_out = next_output_ticks();
     }
