@@ -1,6 +1,6 @@
 // The cooling task: each active gas particle's energy change over its new step, solved implicitly.
 #pragma once
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 
 namespace fountain::cooling {
 

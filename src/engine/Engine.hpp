@@ -8,7 +8,7 @@
 
 #include "cooling/RadiativeCooling.hpp"
 #include "engine/RunConfig.hpp"
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 #include "engine/TaskTypes.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
@@ -17,7 +17,7 @@
 #include "tasks/Executor.hpp"
 #include "tasks/TaskGraph.hpp"
 #include "timestep/Integration.hpp"
-#include "timestep/TimeLine.hpp"
+#include "step/TimeLine.hpp"
 
 namespace fountain {
 

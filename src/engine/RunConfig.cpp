@@ -4,7 +4,7 @@
 
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
-#include "timestep/TimeLine.hpp"
+#include "step/TimeLine.hpp"
 
 namespace fountain {
 

@@ -4,7 +4,7 @@
 
 #include "core/Units.hpp"
 #include "cooling/CoolingParams.hpp"
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
 #include "space/Space.hpp"

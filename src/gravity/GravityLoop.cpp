@@ -2,6 +2,9 @@
 
 #include <vector>
 
+#include "gravity/GravityParams.hpp"
+#include "gravity/GravityTree.hpp"
+
 namespace fountain::gravity {
 
 void build_tree(StepContext& ctx) {

@@ -1,6 +1,6 @@
 // The gravity tasks: the tree over every particle, and the walks of a cell's active particles.
 #pragma once
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 
 namespace fountain::gravity {
 

@@ -2,7 +2,7 @@
 #pragma once
 #include <algorithm>
 
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 #include "hydro/NeighbourBlock.hpp"
 
 namespace fountain::hydro {

@@ -1,6 +1,6 @@
 // The SPH loops over cells that the density, ghost and force tasks run.
 #pragma once
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 #include "hydro/HydroIact.hpp"
 
 namespace fountain::hydro {

@@ -4,7 +4,7 @@
 #include <functional>
 #include <vector>
 
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 #include "starformation/StarFormationLaw.hpp"
 #include "starformation/StarFormationParams.hpp"
 #include "starformation/StarFormationTally.hpp"

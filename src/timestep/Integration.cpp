@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "cooling/RadiativeCooling.hpp"
+#include "gravity/GravityParams.hpp"
 #include "core/Error.hpp"
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"

@@ -1,6 +1,6 @@
 // Drift, kick and timestep of the particles of one cell (leapfrog KDK, individual steps).
 #pragma once
-#include "engine/StepContext.hpp"
+#include "step/StepContext.hpp"
 
 namespace fountain::integration {
 

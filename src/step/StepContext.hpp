@@ -5,17 +5,21 @@
 #include <memory>
 
 #include "core/ForEach.hpp"
-#include "gravity/GravityParams.hpp"
-#include "hydro/HydroParams.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
-#include "timestep/TimeLine.hpp"
+#include "step/TimeLine.hpp"
 
 namespace fountain {
 
+// The physics modules' settings and state, below which this layer sits: named, not included.
+struct HydroParams;
+struct GravityParams;
 namespace cooling {
 class RadiativeCooling;
+}
+namespace gravity {
+class GravityTree;
 }
 
 struct IntegrationParams {

@@ -1,0 +1,34 @@
+#!/bin/sh
+# The layers' include rules, checked over every source file: a layer includes only layers below
+# it. Physics (hydro, gravity, cooling, star formation, time integration) includes neither the
+# engine nor the app; the step's context and clock (src/step) include no physics; the task
+# machinery (tasks/) includes no physics, io, engine or app; io/ nothing of the engine or the
+# app; space, particles and core no layer above them. Usage: check_layers.sh REPO_ROOT
+set -eu
+root=${1:?repo root}
+cd "$root"
+status=0
+# rule FOLDER FORBIDDEN_INCLUDE_PREFIXES...
+rule() {
+  folder=$1; shift
+  [ -d "$folder" ] || return 0
+  for prefix in "$@"; do
+    hits=$(grep -rn --include='*.hpp' --include='*.cpp' "^#include \"$prefix/" "$folder" || true)
+    if [ -n "$hits" ]; then
+      echo "FAIL: $folder must not include $prefix/:"
+      echo "$hits"
+      status=1
+    fi
+  done
+}
+physics="hydro gravity cooling starformation star_formation feedback timestep"
+for layer in $physics; do rule "src/$layer" engine app; done
+# shellcheck disable=SC2086
+rule src/step $physics engine app io analysis ics domain
+# shellcheck disable=SC2086
+rule tasks $physics step engine app io space particles analysis ics domain params
+rule io engine app
+# shellcheck disable=SC2086
+for layer in space particles core; do rule "src/$layer" $physics step engine app io analysis ics domain; done
+[ "$status" -eq 0 ] && echo "PASS: every include follows the layers"
+exit "$status"
