@@ -1,0 +1,82 @@
+#!/bin/sh
+# Every example problem's final snapshot, on 1 thread, 2 threads and 2 MPI ranks, against the
+# digest stored in tests/data/snapshot_checksums.txt: a change meant to move code without
+# changing results (a refactoring) must leave every bit of every problem as it was. A change
+# that alters results on purpose rewrites the stored digests with UPDATE=1 and says why in its
+# commit. Digests hold for the Release build (`sh scripts/build.sh`); other optimisation
+# levels round differently.
+# Usage: snapshot_checksums.sh FOUNTAIN_BINARY REPO_ROOT CASE   (UPDATE=1: store the digest)
+set -eu
+bin=${1:?binary}
+root=${2:?repo root}
+case_name=${3:?case}
+python=${PYTHON:-/usr/bin/python3}
+store="$root/tests/data/snapshot_checksums.txt"
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/fountain_digest.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT INT TERM
+cd "$tmp"
+fail() { echo "FAIL: $*"; exit 1; }
+
+periodic=true t_end=0.02 dt_max=0.001 dt_min=1e-12 extra=""
+case $case_name in
+  sod) "$bin" ic sod -n 24 -o ic.hdf5 > /dev/null ;;
+  sedov) "$bin" ic sedov -n 10 -o ic.hdf5 > /dev/null; t_end=0.01 ;;
+  gresho) "$bin" ic gresho -n 16 -o ic.hdf5 > /dev/null; t_end=0.01 ;;
+  evrard)
+    "$bin" ic evrard -n 6 -o ic.hdf5 > /dev/null
+    periodic=false t_end=0.05 extra="gravity:
+  enabled: true
+  softening_gas: 0.01
+  G: 1" ;;
+  sphere_feedback)
+    "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null
+    periodic=false t_end=6e-4 dt_max=1e-5 dt_min=1e-14 extra="hydro:
+  msph: true
+gravity:
+  enabled: true
+  softening_dark_matter: 0.002
+cooling:
+  enabled: true
+star_formation:
+  enabled: true
+feedback:
+  eps_cold: 0.4
+  eps_hot: 0.4" ;;
+  *) fail "unknown case $case_name" ;;
+esac
+params() {  # params OUT_DIR
+  cat > "params_$1.yml" <<EOT
+run:
+  t_end: $t_end
+initial_conditions:
+  file: ic.hdf5
+  periodic: $periodic
+output:
+  directory: $1
+time_integration:
+  dt_max: $dt_max
+  dt_min: $dt_min
+$extra
+EOT
+}
+params t1; "$bin" run params_t1.yml -q -t 1 > t1.txt 2>&1 || { cat t1.txt; fail "1 thread"; }
+params t2; "$bin" run params_t2.yml -q -t 2 > t2.txt 2>&1 || { cat t2.txt; fail "2 threads"; }
+params r2
+ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_r2.yml -q -t 1 > r2.txt 2>&1 ||
+  { cat r2.txt; fail "2 ranks"; }
+d1=$("$python" "$root/tests/snapshot_digest.py" t1/snapshot_0001.hdf5)
+d2=$("$python" "$root/tests/snapshot_digest.py" t2/snapshot_0001.hdf5)
+dr=$("$python" "$root/tests/snapshot_digest.py" r2/snapshot_0001.hdf5)
+[ "$d1" = "$d2" ] || fail "1 and 2 threads differ"
+[ "$d1" = "$dr" ] || fail "1 thread and 2 ranks differ"
+if [ "${UPDATE:-0}" = 1 ]; then
+  grep -v "^$case_name " "$store" 2>/dev/null > new.txt || true
+  echo "$case_name $d1" >> new.txt
+  sort new.txt > "$store"
+  echo "stored: $case_name $d1"
+  exit 0
+fi
+stored=$(sed -n "s/^$case_name //p" "$store")
+[ -n "$stored" ] || fail "no digest stored for $case_name (UPDATE=1 stores it)"
+[ "$d1" = "$stored" ] || fail "$case_name: digest $d1, stored $stored: the results changed"
+echo "PASS: $case_name $d1 on 1 and 2 threads and 2 ranks"
