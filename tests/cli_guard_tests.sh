@@ -3,16 +3,7 @@
 # refusal to replace an earlier run's files, options and times the run cannot honour, and
 # the messages that name the cause. Each case fails on a build without its guard.
 # Usage: cli_guard_tests.sh FOUNTAIN_BINARY REPO_ROOT CASE
-set -eu
-bin=${1:?binary}
-root=${2:?repo root}
-case_name=${3:?case}
-python=${PYTHON:-/usr/bin/python3}
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/fountain_guard.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT INT TERM
-cd "$tmp"
-
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/cli_prelude.sh"
 
 # params IC_FILE OUT_DIR T_END [extra sections]; RUN_KEYS and OUTPUT_KEYS: more lines (indented)
 # for the run and output sections.

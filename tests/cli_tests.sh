@@ -2,16 +2,7 @@
 # End-to-end checks of the fountain executable: bad input stops it with a clear message and
 # a non-zero exit (never a crash); snapshots open in yt; 1 and 2 threads give identical
 # snapshots. Usage: cli_tests.sh FOUNTAIN_BINARY REPO_ROOT CASE
-set -eu
-bin=${1:?binary}
-root=${2:?repo root}
-case_name=${3:?case}
-python=${PYTHON:-/usr/bin/python3}
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/fountain_cli.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT INT TERM
-cd "$tmp"
-
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/cli_prelude.sh"
 
 # The rotating sphere's physics in the tests that run it (parameter-file lines), and its
 # star formation with multiphase feedback.

@@ -6,16 +6,8 @@
 # commit. Digests hold for the Release build (`sh scripts/build.sh`); other optimisation
 # levels round differently.
 # Usage: snapshot_checksums.sh FOUNTAIN_BINARY REPO_ROOT CASE   (UPDATE=1: store the digest)
-set -eu
-bin=${1:?binary}
-root=${2:?repo root}
-case_name=${3:?case}
-python=${PYTHON:-/usr/bin/python3}
+. "$(dirname "$0")/cli_prelude.sh"
 store="$root/tests/data/snapshot_checksums.txt"
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/fountain_digest.XXXXXX")
-trap 'rm -rf "$tmp"' EXIT INT TERM
-cd "$tmp"
-fail() { echo "FAIL: $*"; exit 1; }
 
 periodic=true t_end=0.02 dt_max=0.001 dt_min=1e-12 extra=""
 case $case_name in

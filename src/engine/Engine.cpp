@@ -533,26 +533,26 @@ void Engine::run_graph(StepInfo* info) {
     info->tasks_run += step_tasks_.size();
   }
   if (ctx_->cover_exceeded) rebuild_pending_ = true;
-  if (info && ctx_->h_capped > 0 && rank_ == 0) {
-    // Harmless (the cells are recut and the next step solves h in full) but it can recur
-    // every few steps in a run with promotions: the first ten are printed, then every 1000th.
-    ++h_capped_steps_;
-    if (h_capped_steps_ <= 10 || h_capped_steps_ % 1000 == 0)
-      fmt::print(stderr, "warning: {} particles had h capped by their cell's reach at t = {}; rebuilding ({} such steps{})\n",
-                 ctx_->h_capped.load(), time(), h_capped_steps_,
-                 h_capped_steps_ == 10 ? "; from here on every 1000th is printed" : "");
-  }
+  // Warnings that can recur every few steps: the first ten such steps are printed, then
+  // every 1000th; `steps` counts them.
+  auto warn_step = [&](long long& steps, const std::string& what) {
+    ++steps;
+    if (rank_ == 0 && (steps <= 10 || steps % 1000 == 0))
+      fmt::print(stderr, "warning: {} ({} such steps{})\n", what, steps,
+                 steps == 10 ? "; from here on every 1000th is printed" : "");
+  };
+  // Harmless: the cells are recut and the next step solves h in full.
+  if (info && ctx_->h_capped > 0)
+    warn_step(h_capped_steps_, fmt::format("{} particles had h capped by their cell's reach at t = {}; rebuilding",
+                                           ctx_->h_capped.load(), time()));
+  // Not harmless: these particles keep fewer neighbours than hydro.neighbours, so their
+  // density is overestimated. Counted for the run's summary too.
   if (ctx_->h_max_capped > 0) {
-    // Not harmless: these particles keep fewer neighbours than hydro.neighbours, so their
-    // density is overestimated. Counted for the run's summary; the first ten steps printed.
     h_max_capped_particles_ += ctx_->h_max_capped;
-    ++h_max_capped_steps_;
-    if (rank_ == 0 && (h_max_capped_steps_ <= 10 || h_max_capped_steps_ % 1000 == 0))
-      fmt::print(stderr,
-                 "warning: {} particles were held at hydro.h_max = {} at t = {} with fewer than hydro.neighbours = {} "
-                 "neighbours, so their densities are too high ({} such steps{})\n",
-                 ctx_->h_max_capped.load(), config_.hydro.h_max, time(), config_.hydro.neighbours, h_max_capped_steps_,
-                 h_max_capped_steps_ == 10 ? "; from here on every 1000th is printed" : "");
+    warn_step(h_max_capped_steps_,
+              fmt::format("{} particles were held at hydro.h_max = {} at t = {} with fewer than hydro.neighbours = {} "
+                          "neighbours, so their densities are too high",
+                          ctx_->h_max_capped.load(), config_.hydro.h_max, time(), config_.hydro.neighbours));
   }
 }
 
@@ -661,9 +661,8 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   IntegerTime ti_next = std::min(ti_stop, TimeLine::ticks);
   for (int c : space_.leaves()) ti_next = std::min(ti_next, space_.cell(c).ti_end_min);
   if (ti_next <= ti_current_) ti_next = ti_current_;
-  // After a restore from inside a step, the step re-run began before ti_current_.
-  const IntegerTime ti_prev = std::min(ti_step_begin_, ti_current_);
-  ti_step_begin_ = ti_prev;
+  // ti_current_ between steps; after a restore from inside a step, that step's start.
+  const IntegerTime ti_prev = ti_step_begin_;
   const int rebuilds_before = space_.rebuild_count();
   prepare_step(ti_next);
   if (after_rebuild_ && space_.rebuild_count() != rebuilds_before) after_rebuild_();

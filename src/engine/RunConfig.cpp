@@ -5,6 +5,7 @@
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
 #include "step/TimeLine.hpp"
+#include "timestep/Integration.hpp"
 
 namespace fountain {
 
@@ -54,17 +55,14 @@ void RunConfig::check_times(const ParameterFile& p, const std::string& start_ori
                                  t_begin, start_origin));
   // Every step and every output time is a whole number of ticks of the integer timeline.
   const TimeLine timeline{t_begin, t_end};
-  const double tick = timeline.time_base();
-  const std::string span = fmt::format("the integer timeline cuts the run from t = {:g} to run.t_end = {:g} into 2^{} "
-                                       "ticks of {:.4g}",
-                                       t_begin, t_end, TimeLine::max_bin, tick);
   if (timeline.bin_for(integration.dt_max) < 0)
-    throw InputError(fmt::format("{} = {} is shorter than one tick: {}; shorten the run or raise dt_max",
-                                 p.where("time_integration.dt_max"), integration.dt_max, span));
-  if (output.delta_time > 0.0 && !(output.delta_time >= tick))
-    throw InputError(fmt::format("{} = {} is shorter than one tick, so snapshots could not be told apart in time: "
-                                 "{}; raise it (0 writes only the first and the last snapshot)",
-                                 p.where("output.delta_time"), output.delta_time, span));
+    throw InputError(fmt::format("{} = {} is shorter than one tick ({}); shorten the run or raise dt_max",
+                                 p.where("time_integration.dt_max"), integration.dt_max,
+                                 integration::tick_text(timeline)));
+  if (output.delta_time > 0.0 && !(output.delta_time >= timeline.time_base()))
+    throw InputError(fmt::format("{} = {} is shorter than one tick ({}), so snapshots could not be told apart in "
+                                 "time; raise it (0 writes only the first and the last snapshot)",
+                                 p.where("output.delta_time"), output.delta_time, integration::tick_text(timeline)));
 }
 
 }  // namespace fountain

@@ -43,14 +43,14 @@ double gravity_timestep(const GravityParams& g, double softening, const Vec3& a)
   return a_norm > 0.0 ? std::sqrt(2.0 * g.eta * softening / a_norm) : std::numeric_limits<double>::infinity();
 }
 
+}  // namespace
+
+namespace integration {
+
 std::string tick_text(const TimeLine& t) {
   return fmt::format("{:.4g}: the run from t = {:g} to run.t_end = {:g} is cut into 2^{} ticks", t.time_base(), t.t_begin,
                      t.t_end, TimeLine::max_bin);
 }
-
-}  // namespace
-
-namespace integration {
 
 void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
   GasParticles& gas = ctx.gas;
@@ -159,7 +159,7 @@ void timestep(StepContext& ctx, int c) {
       if (bin < 0)
         throw InputError(fmt::format("gas particle id {} needs a timestep {} at t = {}, shorter than one tick of the "
                                      "timeline ({})",
-                                     gas.id[i], dt, ctx.timeline.time(ctx.ti_current), tick_text(ctx.timeline)));
+                                     gas.id[i], dt, ctx.timeline.time(ctx.ti_current), integration::tick_text(ctx.timeline)));
       gas.time_bin[i] = static_cast<TimeBin>(bin);
     }
     ti_end_min = std::min(ti_end_min, TimeLine::step_end(gas.time_bin[i], ctx.ti_current));
@@ -181,7 +181,7 @@ void timestep(StepContext& ctx, int c) {
         throw InputError(fmt::format("{} particle id {} needs a timestep {} at t = {}, shorter than one tick of the "
                                      "timeline ({})",
                                      species_name(dm.species[i]), dm.id[i], dt, ctx.timeline.time(ctx.ti_current),
-                                     tick_text(ctx.timeline)));
+                                     integration::tick_text(ctx.timeline)));
       dm.time_bin[i] = static_cast<TimeBin>(bin);
       dm.ti_begin[i] = ctx.ti_current;
     }

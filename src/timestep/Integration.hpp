@@ -35,4 +35,8 @@ void kick_open(StepContext& ctx, int c);
 // limiter): each ends at the next boundary of its requested bin. Runs between steps.
 void wake(StepContext& ctx, int c);
 
+// One tick of the timeline and the span it divides, for messages about steps or times too
+// short to be told apart.
+std::string tick_text(const TimeLine& t);
+
 }  // namespace fountain::integration
