@@ -69,6 +69,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
   GasParticles& gas = ctx.gas;
   const HydroParams& p = ctx.hydro;
   const bool msph = p.msph, limiter = p.timestep_limiter;
+  const bool signal_velocity = p.courant_criterion == CourantCriterion::SignalVelocity;
   const int limiter_bins = p.limiter_bins;
   thread_local ForcePairs q;  // the pairs of one particle at a time
   for_each_active_group(ctx, a, block, true, [&](std::size_t i, NeighbourBlock& near) __attribute__((always_inline)) {
@@ -97,10 +98,10 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
       }
     }
     list_force_pairs(gas, near, hit, kept, xi, fi.v, q);
-    const ForceSums s = sum_force_pairs(fi, q, p);
+    const ForceSums s = signal_velocity ? sum_force_pairs<true>(fi, q, p) : sum_force_pairs<false>(fi, q, p);
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
-    gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);
+    if (signal_velocity) gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);
     if (limiter && kept > 0) {
       const int my_bin = gas.courant_bin[i];
       int min_bin = kNoBin;

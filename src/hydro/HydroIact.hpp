@@ -291,6 +291,9 @@ struct ForcePairs {
   }
 };
 
+// kSignalVelocity: also the largest pair signal velocity, which only the signal-velocity Courant
+// criterion reads (the default criterion's loops skip it).
+template <bool kSignalVelocity>
 [[gnu::always_inline]] inline void iact_force_lanes(const ForceState& i, const ForcePairs& q, std::size_t b, const HydroParams& p,
                              ForceLanes& s) {
   const double hi_inv = 1.0 / i.h;
@@ -328,15 +331,16 @@ struct ForcePairs {
     s.az[l] -= qdz[l] * f;
     s.du_dt[l] += qm[l] * (p_ji + 0.5 * visc) * dw_mean_over_r * vr;
     // A padding pair (c_j = 0, at rest) gives c_i, below any real pair's value.
-    s.v_sig[l] = std::max(s.v_sig[l], signal_velocity(i.c, qc[l], vr, inv_r));
+    if constexpr (kSignalVelocity) s.v_sig[l] = std::max(s.v_sig[l], signal_velocity(i.c, qc[l], vr, inv_r));
   }
 }
 
 // Particle i's force sums over its listed pairs.
+template <bool kSignalVelocity>
 [[gnu::always_inline]] inline ForceSums sum_force_pairs(const ForceState& i, ForcePairs& q, const HydroParams& p) {
   ForceLanes lanes;
   const std::size_t end = q.pad();
-  for (std::size_t b = 0; b < end; b += kLanes) iact_force_lanes(i, q, b, p, lanes);
+  for (std::size_t b = 0; b < end; b += kLanes) iact_force_lanes<kSignalVelocity>(i, q, b, p, lanes);
   return lanes.total();
 }
 
