@@ -5,6 +5,9 @@
 # that alters results on purpose rewrites the stored digests with UPDATE=1 and says why in its
 # commit. Digests hold for the Release build (`sh scripts/build.sh`); other optimisation
 # levels round differently.
+# The task graph each run builds at its start is compared too: its dependency CSV (type links
+# and their counts, on 1 rank and on each of 2 ranks) against tests/data/task_graphs/, so that
+# moving the code that builds the graph leaves every dependency as it was.
 # Usage: snapshot_checksums.sh FOUNTAIN_BINARY REPO_ROOT CASE   (UPDATE=1: store the digest)
 . "$(dirname "$0")/cli_prelude.sh"
 store="$root/tests/data/snapshot_checksums.txt"
@@ -45,6 +48,7 @@ initial_conditions:
   periodic: $periodic
 output:
   directory: $1
+  dump_task_graph: true
 time_integration:
   dt_max: $dt_max
   dt_min: $dt_min
@@ -61,6 +65,25 @@ d2=$("$python" "$root/tests/snapshot_digest.py" t2/snapshot_0001.hdf5)
 dr=$("$python" "$root/tests/snapshot_digest.py" r2/snapshot_0001.hdf5)
 [ "$d1" = "$d2" ] || fail "1 and 2 threads differ"
 [ "$d1" = "$dr" ] || fail "1 thread and 2 ranks differ"
+graphs="$root/tests/data/task_graphs"
+# The rows sorted, without the version line: a graph, not the order its types were registered in.
+graph_rows() { grep -v '^#' "$1" | sort; }
+graph_rows t1/dependency_graph_0.csv > g1.csv
+graph_rows t2/dependency_graph_0.csv > g2.csv
+cmp -s g1.csv g2.csv || fail "the task graphs of 1 and 2 threads differ"
+graph_rows r2/dependency_graph_0.csv > g_r0.csv
+graph_rows r2/dependency_graph_1.csv > g_r1.csv
+if [ "${UPDATE:-0}" = 1 ]; then
+  mkdir -p "$graphs"
+  cp g1.csv "$graphs/${case_name}_1rank.csv"
+  cp g_r0.csv "$graphs/${case_name}_2ranks_0.csv"
+  cp g_r1.csv "$graphs/${case_name}_2ranks_1.csv"
+fi
+for pair in "g1.csv ${case_name}_1rank.csv" "g_r0.csv ${case_name}_2ranks_0.csv" "g_r1.csv ${case_name}_2ranks_1.csv"; do
+  set -- $pair
+  [ -f "$graphs/$2" ] || fail "no task graph stored as $graphs/$2 (UPDATE=1 stores it)"
+  diff "$graphs/$2" "$1" || fail "$case_name: the task graph differs from tests/data/task_graphs/$2"
+done
 if [ "${UPDATE:-0}" = 1 ]; then
   grep -v "^$case_name " "$store" 2>/dev/null > new.txt || true
   echo "$case_name $d1" >> new.txt
