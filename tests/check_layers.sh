@@ -21,7 +21,7 @@ rule() {
     fi
   done
 }
-physics="hydro gravity cooling starformation star_formation feedback timestep"
+physics="hydro gravity cooling star_formation feedback timestep"
 for layer in $physics; do rule "src/$layer" engine app; done
 # shellcheck disable=SC2086
 rule src/step $physics engine app io analysis ics domain

@@ -15,8 +15,8 @@
 #include "engine/Engine.hpp"
 #include "hydro/Kernel.hpp"
 #include "ics/Lattice.hpp"
-#include "starformation/StarFormationLaw.hpp"
-#include "starformation/StarFormationLoop.hpp"
+#include "star_formation/StarFormationLaw.hpp"
+#include "star_formation/StarFormationLoop.hpp"
 
 namespace fountain {
 namespace {
@@ -92,28 +92,28 @@ double total_mass(const Engine& e) { return e.totals().mass; }
 // ---- The law itself -----------------------------------------------------------------------
 
 TEST(StarFormationLaw, EachConditionAloneBlocksFormation) {
-  starformation::StarFormationLaw law{0.1, 1.0, 4e4, 1.0};
-  const starformation::GasState ok{-1.0, 2.0, 10.0, 1.0, 1e4};
-  EXPECT_EQ(law.check(ok), starformation::Eligibility::Eligible);
+  star_formation::StarFormationLaw law{0.1, 1.0, 4e4, 1.0};
+  const star_formation::GasState ok{-1.0, 2.0, 10.0, 1.0, 1e4};
+  EXPECT_EQ(law.check(ok), star_formation::Eligibility::Eligible);
   auto with = [&](auto change) {
-    starformation::GasState s = ok;
+    star_formation::GasState s = ok;
     change(s);
     return law.check(s);
   };
-  EXPECT_EQ(with([](auto& s) { s.div_v = 0.0; }), starformation::Eligibility::NotConverging);
-  EXPECT_EQ(with([](auto& s) { s.rho = 0.5; }), starformation::Eligibility::TooSparse);
-  EXPECT_EQ(with([](auto& s) { s.sound_speed = 100.0; }), starformation::Eligibility::PressureSupported);
-  EXPECT_EQ(with([](auto& s) { s.temperature = 5e4; }), starformation::Eligibility::TooHot);
+  EXPECT_EQ(with([](auto& s) { s.div_v = 0.0; }), star_formation::Eligibility::NotConverging);
+  EXPECT_EQ(with([](auto& s) { s.rho = 0.5; }), star_formation::Eligibility::TooSparse);
+  EXPECT_EQ(with([](auto& s) { s.sound_speed = 100.0; }), star_formation::Eligibility::PressureSupported);
+  EXPECT_EQ(with([](auto& s) { s.temperature = 5e4; }), star_formation::Eligibility::TooHot);
 }
 
 TEST(StarFormationLaw, PromotionThresholdIsTheHigherOfTheTwoRules) {
-  EXPECT_DOUBLE_EQ(starformation::promotion_temperature(4e4, 50, 2, 5e5), 2e6);   // 50 T* wins
-  EXPECT_DOUBLE_EQ(starformation::promotion_temperature(4e4, 50, 2, 3e6), 6e6);   // 2 <T_hot> wins
-  EXPECT_DOUBLE_EQ(starformation::promotion_temperature(4e4, 50, 2, -1.0), 2e6);  // none found
+  EXPECT_DOUBLE_EQ(star_formation::promotion_temperature(4e4, 50, 2, 5e5), 2e6);   // 50 T* wins
+  EXPECT_DOUBLE_EQ(star_formation::promotion_temperature(4e4, 50, 2, 3e6), 6e6);   // 2 <T_hot> wins
+  EXPECT_DOUBLE_EQ(star_formation::promotion_temperature(4e4, 50, 2, -1.0), 2e6);  // none found
 }
 
 TEST(StarFormationLaw, FeedbackSharesAddUpToTheEnergy) {
-  const auto s = starformation::split_feedback(3.0, 0.4, 0.25);
+  const auto s = star_formation::split_feedback(3.0, 0.4, 0.25);
   EXPECT_DOUBLE_EQ(s.reservoir, 1.2);
   EXPECT_DOUBLE_EQ(s.hot, 0.75);
   EXPECT_DOUBLE_EQ(s.own + s.reservoir + s.hot, 3.0);
@@ -279,13 +279,13 @@ TEST(StarFormationConservation, MixingInColderGasKeepsACoolingParticlePositive) 
   const double remaining = 1.0, floor = 210.0;  // time to the step's end; the floor energy
   g.du_dt_cool[0] = g.du_dt[0] = (floor - g.u[0]) / remaining;
   g.v[0] = g.v_full[0] = Vec3{3.0, 0.0, 0.0};
-  starformation::StarFormationTally tally;
+  star_formation::StarFormationTally tally;
   const double m_in = 6.0, u_in = 20.0;
   const Vec3 v_in{-1.0, 2.0, 0.0};
   const double e_before = g.mass[0] * g.u[0] + 0.5 * g.mass[0] * dot(g.v[0], g.v[0]) + m_in * u_in +
                           0.5 * m_in * dot(v_in, v_in);
   const Vec3 p_before = g.v[0] * g.mass[0] + v_in * m_in;
-  starformation::absorb(g, 0, m_in, 0.0, v_in, u_in, 0.0, tally);
+  star_formation::absorb(g, 0, m_in, 0.0, v_in, u_in, 0.0, tally);
   EXPECT_DOUBLE_EQ(g.mass[0], 8.0);
   const double e_after = g.mass[0] * g.u[0] + 0.5 * g.mass[0] * dot(g.v[0], g.v[0]);
   EXPECT_NEAR(e_after, e_before, 1e-12 * e_before);

@@ -2,12 +2,6 @@
 
 namespace fountain::analysis {
 
-TemperatureOf ideal_gas_temperature(const Units& units, double gamma, double mean_molecular_weight) {
-  constexpr double k_boltzmann = 1.380649e-16, m_proton = 1.67262192e-24;
-  const double factor = (gamma - 1.0) * mean_molecular_weight * m_proton / k_boltzmann * units.specific_energy_cgs();
-  return [factor](double u) { return factor * u; };
-}
-
 Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
                     const PhaseThresholds& phases) {
   Diagnostics d;

@@ -1,7 +1,6 @@
 // The paper's time-series diagnostics (docs/physics.md section 7): gas phases, energies, momenta, unbound gas.
 #pragma once
-#include <functional>
-
+#include "core/IdealGas.hpp"
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
 #include "particles/CollisionlessParticles.hpp"
@@ -36,13 +35,6 @@ struct Diagnostics {
   Vec3 momentum, angular_momentum;   // about the origin
   double total_energy() const { return thermal + kinetic + potential; }
 };
-
-// Temperature (K) of gas of specific energy u (internal units).
-using TemperatureOf = std::function<double(double u)>;
-
-// T of a fully ionised primordial gas (mean molecular weight 0.59), for runs without the
-// cooling tables' own mean particle mass.
-TemperatureOf ideal_gas_temperature(const Units& units, double gamma, double mean_molecular_weight = 0.59);
 
 // Sums over the current particle state (gas at its predicted values; potentials from the
 // last force computation, zero without gravity).

@@ -246,9 +246,9 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   info.git_revision = git_revision();
   info.build_options = build_options();
 
-  const analysis::TemperatureOf temperature =
-      engine.cooling() ? analysis::TemperatureOf([c = engine.cooling()](double u) { return c->temperature(u); })
-                       : analysis::ideal_gas_temperature(config.units, config.hydro.gamma);
+  const TemperatureOf temperature =
+      engine.cooling() ? TemperatureOf([c = engine.cooling()](double u) { return c->temperature(u); })
+                       : ideal_gas_temperature(config.units, config.hydro.gamma);
   info.temperature = temperature;
   info.star_formation = config.star_formation.enabled;
 

@@ -8,8 +8,8 @@
 namespace fountain {
 
 static_assert(std::is_trivially_copyable_v<Cell>);
-static_assert(std::is_trivially_copyable_v<starformation::FeedbackSite>);
-static_assert(std::is_trivially_copyable_v<starformation::StarFormationTally>);
+static_assert(std::is_trivially_copyable_v<star_formation::FeedbackSite>);
+static_assert(std::is_trivially_copyable_v<star_formation::StarFormationTally>);
 
 namespace {
 // Packs (Stream = MessageWriter), or unpacks (MessageReader), the slice [first, first + count)
@@ -174,7 +174,7 @@ std::size_t ghost_results_bytes(const Space& space, int c) {
   return sizeof(double) + per * space.cell(c).count;
 }
 
-void pack_feedback_sites(MessageWriter& w, const starformation::CellFeedback& cf) {
+void pack_feedback_sites(MessageWriter& w, const star_formation::CellFeedback& cf) {
   w.put(cf.tally);
   w.put(cf.sites.size());
   w.put(cf.sites.data(), cf.sites.size());
@@ -182,8 +182,8 @@ void pack_feedback_sites(MessageWriter& w, const starformation::CellFeedback& cf
   w.put(cf.neighbours.data(), cf.neighbours.size());
 }
 
-void unpack_feedback_sites(MessageReader& r, starformation::CellFeedback& cf) {
-  cf.tally = r.get<starformation::StarFormationTally>();
+void unpack_feedback_sites(MessageReader& r, star_formation::CellFeedback& cf) {
+  cf.tally = r.get<star_formation::StarFormationTally>();
   cf.sites.resize(r.get<std::size_t>());
   r.get(cf.sites.data(), cf.sites.size());
   cf.neighbours.resize(r.get<std::size_t>());

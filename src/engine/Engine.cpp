@@ -7,14 +7,14 @@
 #include <chrono>
 #include <cmath>
 
-#include "analysis/Diagnostics.hpp"
+#include "core/IdealGas.hpp"
 #include "core/Error.hpp"
 #include "cooling/CoolingLoop.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "hydro/HydroLoops.hpp"
-#include "starformation/StarFormationLoop.hpp"
+#include "star_formation/StarFormationLoop.hpp"
 #include "tasks/ThreadPinning.hpp"
 #include "timestep/Integration.hpp"
 
@@ -72,7 +72,7 @@ Engine::~Engine() = default;
 
 void Engine::setup_star_formation() {
   const StarFormationParams& p = config_.star_formation;
-  sf_ = std::make_unique<starformation::StarFormationState>();
+  sf_ = std::make_unique<star_formation::StarFormationState>();
   sf_->params = p;
   sf_->law = {p.efficiency, p.density_threshold(config_.units), p.temperature_threshold, config_.gravity.G};
   sf_->energy_per_mass = p.energy_per_mass(config_.units);
@@ -82,7 +82,7 @@ void Engine::setup_star_formation() {
     sf_->energy_at = [c](double t) { return c->energy_at(t); };
   } else {
     // Fully ionised primordial gas, as the diagnostics assume: T is proportional to u.
-    const double factor = analysis::ideal_gas_temperature(config_.units, config_.hydro.gamma)(1.0);
+    const double factor = ideal_gas_kelvin_per_energy(config_.units, config_.hydro.gamma);
     sf_->temperature = [factor](double u) { return factor * u; };
     sf_->energy_at = [factor](double t) { return t / factor; };
   }
@@ -451,7 +451,7 @@ void Engine::run_graph(StepInfo* info) {
   ctx_->h_max_capped = 0;
   StepContext& ctx = *ctx_;
   const TaskTypes& T = types_;
-  starformation::StarFormationState* sf = sf_.get();
+  star_formation::StarFormationState* sf = sf_.get();
   if (sf) sf->time = time();
   const std::vector<int>& leaves = space_.leaves();
   if (ranks_) post_receives();
@@ -467,8 +467,8 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
     else if (t.type == T.cooling) cooling::cool_cell(ctx, t.ci);
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
-    else if (t.type == T.star_formation) starformation::form_stars(ctx, *sf, t.ci);
-    else if (t.type == T.feedback_search) starformation::find_hot_neighbours(ctx, *sf, t.ci);
+    else if (t.type == T.star_formation) star_formation::form_stars(ctx, *sf, t.ci);
+    else if (t.type == T.feedback_search) star_formation::find_hot_neighbours(ctx, *sf, t.ci);
     else if (t.type == T.star_formation_done) {
       // Feedback reads neighbours in any cell, as star formation left them; it is their only
       // reader before the exchange after the graph, so with no site on any rank (a run before
@@ -482,7 +482,7 @@ void Engine::run_graph(StepInfo* info) {
       }
     } else if (t.type == T.feedback_apply) {
       if (ranks_ && feedback_sites_anywhere_) sync_feedback_sites();
-      starformation::apply_feedback(ctx, *sf, leaves);
+      star_formation::apply_feedback(ctx, *sf, leaves);
     } else if (t.type == T.send) {
       domain::RankExchange::Buffer b;
       b.reserve(ghost_results_bytes(space_, t.ci));
@@ -622,14 +622,14 @@ void Engine::collect_radiated() {
 
 void Engine::finish_star_formation() {
   if (!sf_) return;
-  starformation::StarFormationTally step = sf_->step_tally;
+  star_formation::StarFormationTally step = sf_->step_tally;
   sf_->step_tally = {};
   for (int c : space_.leaves()) {  // in a fixed order, so the sums are reproducible
     auto& cf = sf_->cells[static_cast<std::size_t>(c)];
     step += cf.tally;
     cf.tally = {};
   }
-  const bool changed = starformation::spawn_and_dissolve(*ctx_, *sf_, next_id_);
+  const bool changed = star_formation::spawn_and_dissolve(*ctx_, *sf_, next_id_);
   step += sf_->step_tally;
   sf_->step_tally = {};
   // New stars must join the cells and dissolved gas leave them before anything else runs;

@@ -13,7 +13,7 @@
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
-#include "starformation/StarFormationTally.hpp"
+#include "star_formation/StarFormationTally.hpp"
 #include "tasks/Executor.hpp"
 #include "tasks/TaskGraph.hpp"
 #include "timestep/Integration.hpp"
@@ -23,7 +23,7 @@ namespace fountain {
 
 class MessageWriter;
 class MessageReader;
-namespace starformation {
+namespace star_formation {
 struct StarFormationState;
 }
 namespace domain {
@@ -118,9 +118,9 @@ class Engine {
   Totals totals() const;
   // What star formation and feedback did since the start of the run, and in the last step
   // (zero when star formation is off); set_star_formation_total continues it after a restart.
-  const starformation::StarFormationTally& star_formation_total() const { return sf_total_; }
-  const starformation::StarFormationTally& star_formation_last_step() const { return sf_last_step_; }
-  void set_star_formation_total(const starformation::StarFormationTally& t) { sf_total_ = t; }
+  const star_formation::StarFormationTally& star_formation_total() const { return sf_total_; }
+  const star_formation::StarFormationTally& star_formation_last_step() const { return sf_last_step_; }
+  void set_star_formation_total(const star_formation::StarFormationTally& t) { sf_total_ = t; }
   // Tallies this step's star formation, then spawns stars and dissolves gas (recutting the
   // cells if any particle came or went). Every step ends with it; public so that tests can
   // apply it to a state they set up.
@@ -255,8 +255,8 @@ class Engine {
   std::vector<int> refit_tasks_;
   int star_formation_done_task_ = -1, feedback_apply_task_ = -1;
   bool feedback_sites_anywhere_ = true;  // across ranks: some rank has a feedback site this step
-  std::unique_ptr<starformation::StarFormationState> sf_;
-  starformation::StarFormationTally sf_total_, sf_last_step_;
+  std::unique_ptr<star_formation::StarFormationState> sf_;
+  star_formation::StarFormationTally sf_total_, sf_last_step_;
   std::uint64_t next_id_ = 0;  // for spawned stars
   double radiated_ = 0.0;
   IntegerTime ti_current_ = 0;

@@ -11,7 +11,7 @@
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
 #include "engine/Engine.hpp"
-#include "starformation/StarFormationLoop.hpp"
+#include "star_formation/StarFormationLoop.hpp"
 
 namespace fountain {
 

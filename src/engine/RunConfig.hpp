@@ -8,7 +8,7 @@
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
 #include "space/Space.hpp"
-#include "starformation/StarFormationParams.hpp"
+#include "star_formation/StarFormationParams.hpp"
 
 namespace fountain {
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace fountain::starformation {
+namespace fountain::star_formation {
 
 // Why gas does or does not form stars: the paper's conditions (a)-(d), checked in order.
 enum class Eligibility { Eligible, NotConverging, TooSparse, PressureSupported, TooHot };
@@ -66,4 +66,4 @@ inline double promotion_temperature(double t_star, double factor, double hot_fac
   return std::max(factor * t_star, mean_hot > 0.0 ? hot_factor * mean_hot : 0.0);
 }
 
-}  // namespace fountain::starformation
+}  // namespace fountain::star_formation

@@ -1,4 +1,4 @@
-#include "starformation/StarFormationLoop.hpp"
+#include "star_formation/StarFormationLoop.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,9 +6,9 @@
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "hydro/Kernel.hpp"
-#include "starformation/NeighbourSearch.hpp"
+#include "space/NeighbourSearch.hpp"
 
-namespace fountain::starformation {
+namespace fountain::star_formation {
 
 namespace {
 
@@ -261,4 +261,4 @@ bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t&
   return changed;
 }
 
-}  // namespace fountain::starformation
+}  // namespace fountain::star_formation

@@ -5,11 +5,11 @@
 #include <vector>
 
 #include "step/StepContext.hpp"
-#include "starformation/StarFormationLaw.hpp"
-#include "starformation/StarFormationParams.hpp"
-#include "starformation/StarFormationTally.hpp"
+#include "star_formation/StarFormationLaw.hpp"
+#include "star_formation/StarFormationParams.hpp"
+#include "star_formation/StarFormationTally.hpp"
 
-namespace fountain::starformation {
+namespace fountain::star_formation {
 
 // A particle with feedback to hand out or a reservoir to test for promotion, and its
 // nearest hot neighbours (found by the cell's search task).
@@ -62,4 +62,4 @@ void promote(StepContext& ctx, StarFormationState& sf, std::size_t i);
 // Returns whether any particle was created or dissolved.
 bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t& next_id);
 
-}  // namespace fountain::starformation
+}  // namespace fountain::star_formation

@@ -1,4 +1,4 @@
-#include "starformation/StarFormationParams.hpp"
+#include "star_formation/StarFormationParams.hpp"
 
 #include <fmt/format.h>
 

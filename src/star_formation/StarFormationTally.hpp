@@ -1,7 +1,7 @@
 // Running sums of what star formation and feedback did: mass formed, energy per channel, events.
 #pragma once
 
-namespace fountain::starformation {
+namespace fountain::star_formation {
 
 struct StarFormationTally {
   double mass_formed = 0.0;        // gas turned into (hidden) stars
@@ -27,4 +27,4 @@ struct StarFormationTally {
   double energy_injected() const { return energy_own + energy_reservoir + energy_hot; }
 };
 
-}  // namespace fountain::starformation
+}  // namespace fountain::star_formation

@@ -8,7 +8,7 @@
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
 
-namespace fountain::starformation {
+namespace fountain {
 
 // Distance from a point to a leaf's box (nearest periodic image), less how far its
 // particles may have moved out of it since the rebuild.
@@ -25,4 +25,4 @@ void for_each_within(const Space& space, const GasParticles& gas, const Vec3& p,
 std::vector<std::size_t> nearest(const Space& space, const GasParticles& gas, const Vec3& p, std::size_t self,
                                  std::size_t k, double max_radius, const std::function<bool(std::size_t)>& accept);
 
-}  // namespace fountain::starformation
+}  // namespace fountain

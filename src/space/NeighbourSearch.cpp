@@ -1,11 +1,11 @@
-#include "starformation/NeighbourSearch.hpp"
+#include "space/NeighbourSearch.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
 
-namespace fountain::starformation {
+namespace fountain {
 
 double reach_distance(const Space& space, const Vec3& p, const Cell& leaf) {
   const Vec3 d = space.separation(leaf.centre(), p);
@@ -75,4 +75,4 @@ std::vector<std::size_t> nearest(const Space& space, const GasParticles& gas, co
   return out;
 }
 
-}  // namespace fountain::starformation
+}  // namespace fountain
