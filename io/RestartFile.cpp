@@ -151,13 +151,13 @@ void read_field(const hdf5::File& f, const std::string& name, std::vector<Specie
 }
 
 // The star formation tally as numbers, in a fixed order (stored as one attribute).
-std::vector<double> tally_values(const starformation::StarFormationTally& t) {
+std::vector<double> tally_values(const star_formation::StarFormationTally& t) {
   return {t.mass_formed, t.thermal_locked, t.energy_own, t.energy_reservoir, t.energy_hot, t.energy_released,
           t.kinetic_to_heat, static_cast<double>(t.promotions), static_cast<double>(t.stars_spawned),
           static_cast<double>(t.gas_dissolved), static_cast<double>(t.hot_without_neighbours)};
 }
-starformation::StarFormationTally tally_from(const std::vector<double>& v) {
-  starformation::StarFormationTally t;
+star_formation::StarFormationTally tally_from(const std::vector<double>& v) {
+  star_formation::StarFormationTally t;
   if (v.size() != 11) return t;
   t.mass_formed = v[0]; t.thermal_locked = v[1]; t.energy_own = v[2]; t.energy_reservoir = v[3];
   t.energy_hot = v[4]; t.energy_released = v[5]; t.kinetic_to_heat = v[6];

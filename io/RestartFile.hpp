@@ -6,7 +6,7 @@
 
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
-#include "starformation/StarFormationTally.hpp"
+#include "star_formation/StarFormationTally.hpp"
 
 namespace fountain::io {
 
@@ -27,7 +27,7 @@ struct RestartState {
   int next_output = 1;
   double radiated_energy = 0.0;  // by cooling, since the start
   std::uint64_t next_particle_id = 0;  // the id the next spawned star takes (0: none spawned yet)
-  starformation::StarFormationTally star_formation;  // since the start
+  star_formation::StarFormationTally star_formation;  // since the start
   std::string parameters_yaml;  // the parameters the run was started with
   long long serial = 0;  // of the last piece set written (0: none), for the next set's names
 };
