@@ -76,8 +76,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.gravity.softening_gas = 0.5 * softening;
   c.cooling.enabled = cooling;
   c.star_formation.enabled = star_formation;
-  c.star_formation.eps_cold = eps_cold;
-  c.star_formation.eps_hot = eps_hot;
+  c.feedback.eps_cold = eps_cold;
+  c.feedback.eps_hot = eps_hot;
   const std::size_t n = ic.gas.size() + ic.dm.size();
 
   const auto t0 = std::chrono::steady_clock::now();

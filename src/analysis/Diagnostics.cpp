@@ -3,7 +3,7 @@
 namespace fountain::analysis {
 
 Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
-                    const PhaseThresholds& phases) {
+                    const FigurePhases& phases) {
   Diagnostics d;
   for (std::size_t i = 0; i < gas.size(); ++i) {
     const double m = gas.mass[i];
@@ -13,8 +13,8 @@ Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, c
     d.mass_stars_hidden += m_dyn - m;
     d.reservoir += gas.reservoir[i];
     const double t = temperature(gas.u[i]);
-    const bool cold = t <= 2.0 * phases.t_star_k && gas.rho[i] > 0.1 * phases.rho_star_internal;
-    if (t > 2.0 * phases.t_star_k) d.mass_hot += m;
+    const bool cold = phases.cold(t, gas.rho[i]);
+    if (phases.hot(t)) d.mass_hot += m;
     else if (cold) d.mass_cold += m;
     else d.mass_warm += m;
     if (gas.promoted[i] && !cold) d.mass_promoted_diffuse += m;

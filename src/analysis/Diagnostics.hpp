@@ -8,13 +8,16 @@
 
 namespace fountain::analysis {
 
-// Phase boundaries of the paper's analysis (section 3.2): hot T > 2 T*; cold T <= 2 T* and
-// rho > 0.1 rho*; warm otherwise.
-struct PhaseThresholds {
+// The phases of the paper's figures and time series (its section 3.2): hot T > 2 T*; cold
+// T <= 2 T* and rho > 0.1 rho*; warm otherwise. (Feedback's cold phase, T < 2 T*, is
+// feedback's own: feedback/FeedbackLaw.hpp.)
+struct FigurePhases {
   double t_star_k = 4.0e4;           // T*
   double rho_star_internal = 0.0;    // rho* = 5e-26 g cm^-3 in internal density units (physical)
 
-  static PhaseThresholds paper(const Units& units) { return {4.0e4, 5.0e-26 / units.density_cgs()}; }
+  static FigurePhases paper(const Units& units) { return {4.0e4, 5.0e-26 / units.density_cgs()}; }
+  bool hot(double t) const { return t > 2.0 * t_star_k; }
+  bool cold(double t, double rho) const { return t <= 2.0 * t_star_k && rho > 0.1 * rho_star_internal; }
 };
 
 struct Diagnostics {
@@ -39,6 +42,6 @@ struct Diagnostics {
 // Sums over the current particle state (gas at its predicted values; potentials from the
 // last force computation, zero without gravity).
 Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
-                    const PhaseThresholds& phases);
+                    const FigurePhases& phases);
 
 }  // namespace fountain::analysis

@@ -365,7 +365,7 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   std::unique_ptr<io::StatisticsFile> statistics;
   if (config.output.statistics_every > 0 && io_rank)
     statistics = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", restart);
-  const analysis::PhaseThresholds phases = analysis::PhaseThresholds::paper(config.units);
+  const analysis::FigurePhases phases = analysis::FigurePhases::paper(config.units);
   // The star formation rate of a line is the mean since the previous line.
   double sf_mass_before = engine.star_formation_total().mass_formed, sf_time_before = engine.time();
   const double msun_per_mass = config.units.mass_cgs / 1.988409870698051e33;

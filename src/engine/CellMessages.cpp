@@ -8,7 +8,7 @@
 namespace fountain {
 
 static_assert(std::is_trivially_copyable_v<Cell>);
-static_assert(std::is_trivially_copyable_v<star_formation::FeedbackSite>);
+static_assert(std::is_trivially_copyable_v<feedback::FeedbackSite>);
 static_assert(std::is_trivially_copyable_v<star_formation::StarFormationTally>);
 
 namespace {
@@ -174,7 +174,7 @@ std::size_t ghost_results_bytes(const Space& space, int c) {
   return sizeof(double) + per * space.cell(c).count;
 }
 
-void pack_feedback_sites(MessageWriter& w, const star_formation::CellFeedback& cf) {
+void pack_feedback_sites(MessageWriter& w, const feedback::CellFeedback& cf) {
   w.put(cf.tally);
   w.put(cf.sites.size());
   w.put(cf.sites.data(), cf.sites.size());
@@ -182,7 +182,7 @@ void pack_feedback_sites(MessageWriter& w, const star_formation::CellFeedback& c
   w.put(cf.neighbours.data(), cf.neighbours.size());
 }
 
-void unpack_feedback_sites(MessageReader& r, star_formation::CellFeedback& cf) {
+void unpack_feedback_sites(MessageReader& r, feedback::CellFeedback& cf) {
   cf.tally = r.get<star_formation::StarFormationTally>();
   cf.sites.resize(r.get<std::size_t>());
   r.get(cf.sites.data(), cf.sites.size());

@@ -11,7 +11,7 @@
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
-#include "star_formation/StarFormationLoop.hpp"
+#include "feedback/FeedbackLoop.hpp"
 
 namespace fountain {
 
@@ -158,7 +158,7 @@ void unpack_ghost_results(MessageReader& r, Space& space, GasParticles& gas, int
 std::size_t ghost_results_bytes(const Space& space, int c);
 
 // Leaf c's feedback sites and their hot neighbours (particle indices, the same on every rank).
-void pack_feedback_sites(MessageWriter& w, const star_formation::CellFeedback& cf);
-void unpack_feedback_sites(MessageReader& r, star_formation::CellFeedback& cf);
+void pack_feedback_sites(MessageWriter& w, const feedback::CellFeedback& cf);
+void unpack_feedback_sites(MessageReader& r, feedback::CellFeedback& cf);
 
 }  // namespace fountain

@@ -75,18 +75,22 @@ void Engine::setup_star_formation() {
   sf_ = std::make_unique<star_formation::StarFormationState>();
   sf_->params = p;
   sf_->law = {p.efficiency, p.density_threshold(config_.units), p.temperature_threshold, config_.gravity.G};
-  sf_->energy_per_mass = p.energy_per_mass(config_.units);
+  fb_ = std::make_unique<feedback::FeedbackState>();
+  fb_->params = config_.feedback;
+  fb_->t_star = p.temperature_threshold;
+  fb_->energy_per_mass = config_.feedback.energy_per_mass(config_.units);
   if (cooling_) {
     const cooling::RadiativeCooling* c = cooling_.get();
     sf_->temperature = [c](double u) { return c->temperature(u); };
-    sf_->energy_at = [c](double t) { return c->energy_at(t); };
+    fb_->energy_at = [c](double t) { return c->energy_at(t); };
   } else {
     // Fully ionised primordial gas, as the diagnostics assume: T is proportional to u.
     const double factor = ideal_gas_kelvin_per_energy(config_.units, config_.hydro.gamma);
     sf_->temperature = [factor](double u) { return factor * u; };
-    sf_->energy_at = [factor](double t) { return t / factor; };
+    fb_->energy_at = [factor](double t) { return t / factor; };
   }
-  sf_->u_cold_max = sf_->energy_at(2.0 * p.temperature_threshold);
+  fb_->temperature = sf_->temperature;
+  fb_->cold = {0.1 * sf_->law.rho_threshold, fb_->energy_at(2.0 * p.temperature_threshold)};
   for (auto i : gas_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
   for (auto i : dm_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
 }
@@ -227,7 +231,7 @@ void Engine::build_graph() {
   // Direct, so the order holds on a rank that lists no search in between (both exchange
   // with the other ranks, which call them in this order).
   if (star_formation) graph_.depends(star_formation_done_task_, feedback_apply_task_);
-  if (star_formation) sf_->cells.assign(ncells, {});
+  if (star_formation) fb_->cells.assign(ncells, {});
   // The density and force tasks of a cell read its neighbour cells: (task, reader) edges.
   struct Reader { int task, ci; };
   std::vector<Reader> dreaders, freaders;
@@ -452,10 +456,11 @@ void Engine::run_graph(StepInfo* info) {
   StepContext& ctx = *ctx_;
   const TaskTypes& T = types_;
   star_formation::StarFormationState* sf = sf_.get();
-  if (sf) sf->time = time();
+  feedback::FeedbackState* fb = fb_.get();
+  if (sf) sf->time = fb->time = time();
   const std::vector<int>& leaves = space_.leaves();
   if (ranks_) post_receives();
-  auto runner = [this, &ctx, &T, sf, &leaves](const tasks::Task& t) {
+  auto runner = [this, &ctx, &T, sf, fb, &leaves](const tasks::Task& t) {
     if (t.type == T.drift) integration::drift(ctx, t.ci, integration::ForceInputs::UnlessGhost);
     else if (t.type == T.density) hydro::density(ctx, t.ci);
     else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
@@ -467,8 +472,8 @@ void Engine::run_graph(StepInfo* info) {
     else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
     else if (t.type == T.cooling) cooling::cool_cell(ctx, t.ci);
     else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
-    else if (t.type == T.star_formation) star_formation::form_stars(ctx, *sf, t.ci);
-    else if (t.type == T.feedback_search) star_formation::find_hot_neighbours(ctx, *sf, t.ci);
+    else if (t.type == T.star_formation) star_formation::form_stars(ctx, *sf, *fb, t.ci);
+    else if (t.type == T.feedback_search) feedback::find_hot_neighbours(ctx, *fb, t.ci);
     else if (t.type == T.star_formation_done) {
       // Feedback reads neighbours in any cell, as star formation left them; it is their only
       // reader before the exchange after the graph, so with no site on any rank (a run before
@@ -476,13 +481,13 @@ void Engine::run_graph(StepInfo* info) {
       if (ranks_) {
         long long sites = 0;
         for (int c : leaves)
-          if (mine(c)) sites += static_cast<long long>(sf->cells[static_cast<std::size_t>(c)].sites.size());
+          if (mine(c)) sites += static_cast<long long>(fb->cells[static_cast<std::size_t>(c)].sites.size());
         feedback_sites_anywhere_ = ranks_->sum(sites) > 0;
         if (feedback_sites_anywhere_) sync_owned_cells(true);
       }
     } else if (t.type == T.feedback_apply) {
       if (ranks_ && feedback_sites_anywhere_) sync_feedback_sites();
-      star_formation::apply_feedback(ctx, *sf, leaves);
+      feedback::apply_feedback(ctx, *fb, leaves);
     } else if (t.type == T.send) {
       domain::RankExchange::Buffer b;
       b.reserve(ghost_results_bytes(space_, t.ci));
@@ -622,10 +627,10 @@ void Engine::collect_radiated() {
 
 void Engine::finish_star_formation() {
   if (!sf_) return;
-  star_formation::StarFormationTally step = sf_->step_tally;
-  sf_->step_tally = {};
+  star_formation::StarFormationTally step = fb_->step_tally;
+  fb_->step_tally = {};
   for (int c : space_.leaves()) {  // in a fixed order, so the sums are reproducible
-    auto& cf = sf_->cells[static_cast<std::size_t>(c)];
+    auto& cf = fb_->cells[static_cast<std::size_t>(c)];
     step += cf.tally;
     cf.tally = {};
   }

@@ -13,7 +13,7 @@
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
-#include "star_formation/StarFormationTally.hpp"
+#include "step/StarFormationTally.hpp"
 #include "tasks/Executor.hpp"
 #include "tasks/TaskGraph.hpp"
 #include "timestep/Integration.hpp"
@@ -25,6 +25,9 @@ class MessageWriter;
 class MessageReader;
 namespace star_formation {
 struct StarFormationState;
+}
+namespace feedback {
+struct FeedbackState;
 }
 namespace domain {
 class RankExchange;
@@ -256,6 +259,7 @@ class Engine {
   int star_formation_done_task_ = -1, feedback_apply_task_ = -1;
   bool feedback_sites_anywhere_ = true;  // across ranks: some rank has a feedback site this step
   std::unique_ptr<star_formation::StarFormationState> sf_;
+  std::unique_ptr<feedback::FeedbackState> fb_;  // with star formation
   star_formation::StarFormationTally sf_total_, sf_last_step_;
   std::uint64_t next_id_ = 0;  // for spawned stars
   double radiated_ = 0.0;

@@ -282,8 +282,8 @@ void Engine::sync_owned_cells(bool gas_cells_only) {
 void Engine::sync_feedback_sites() {
   exchange_active_leaves(
       true, sync_buffer_,
-      [&](MessageWriter& w, int c) { pack_feedback_sites(w, sf_->cells[static_cast<std::size_t>(c)]); },
-      [&](MessageReader& r, int c) { unpack_feedback_sites(r, sf_->cells[static_cast<std::size_t>(c)]); },
+      [&](MessageWriter& w, int c) { pack_feedback_sites(w, fb_->cells[static_cast<std::size_t>(c)]); },
+      [&](MessageReader& r, int c) { unpack_feedback_sites(r, fb_->cells[static_cast<std::size_t>(c)]); },
       "feedback sites");
 }
 

@@ -35,6 +35,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.units.velocity_cgs = p.real("units.velocity_cgs");
   c.gravity = GravityParams::from(p, c.units);
   c.cooling = CoolingParams::from(p);
+  c.feedback = FeedbackParams::from(p);
   c.star_formation = StarFormationParams::from(p);
   c.output.directory = p.text("output.directory");
   c.output.basename = p.text("output.basename");

@@ -8,6 +8,7 @@
 #include "gravity/GravityParams.hpp"
 #include "hydro/HydroParams.hpp"
 #include "space/Space.hpp"
+#include "feedback/FeedbackParams.hpp"
 #include "star_formation/StarFormationParams.hpp"
 
 namespace fountain {
@@ -39,6 +40,7 @@ struct RunConfig {
   GravityParams gravity;
   CoolingParams cooling;
   StarFormationParams star_formation;
+  FeedbackParams feedback;  // of star formation: runs when it does
   IntegrationParams integration;
   SpaceConfig space;
   double repartition_imbalance = 0.1;  // across ranks: recut owners above this imbalance

@@ -1,6 +1,5 @@
-// The star formation recipe and the feedback phase rules as pure functions (docs/physics.md sections 5-6).
+// The star formation recipe as pure functions: when gas may form stars, and how fast (docs/physics.md, star formation).
 #pragma once
-#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -39,31 +38,6 @@ struct StarFormationLaw {
   double mass_formed(double m_gas, double rho, double dt) const {
     return -m_gas * std::expm1(-efficiency * dt / dynamical_time(rho));
   }
-
-  // Feedback's cold phase: rho > 0.1 rho* and T < 2 T*. Everything else is hot.
-  bool feedback_cold(double rho, double temperature) const {
-    return rho > 0.1 * rho_threshold && temperature < 2.0 * t_threshold;
-  }
 };
-
-// Supernova energy e_sn dM split among the three channels of MFB.
-struct FeedbackShares {
-  double own = 0.0;        // 1 - eps_c - eps_h: the particle's own thermal energy
-  double reservoir = 0.0;  // eps_c
-  double hot = 0.0;        // eps_h: the nearest hot neighbours
-};
-
-inline FeedbackShares split_feedback(double energy, double eps_cold, double eps_hot) {
-  FeedbackShares s;
-  s.reservoir = eps_cold * energy;
-  s.hot = eps_hot * energy;
-  s.own = energy - s.reservoir - s.hot;
-  return s;
-}
-
-// T_prom = max(factor T*, hot_factor x mean T of the hot neighbours); mean_hot < 0: none found.
-inline double promotion_temperature(double t_star, double factor, double hot_factor, double mean_hot) {
-  return std::max(factor * t_star, mean_hot > 0.0 ? hot_factor * mean_hot : 0.0);
-}
 
 }  // namespace fountain::star_formation

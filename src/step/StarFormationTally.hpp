@@ -1,4 +1,5 @@
-// Running sums of what star formation and feedback did: mass formed, energy per channel, events.
+// Running sums of what star formation and its feedback did: mass formed, energy per channel, events.
+// Both modules write it and the engine, io and messages read it, so it lives below them all.
 #pragma once
 
 namespace fountain::star_formation {
