@@ -102,7 +102,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
     for (std::size_t t = 0; t < records.size(); ++t) {
       const auto& r = records[t];
       if (r.end_ns <= r.start_ns) continue;
-      category_s[e.task_types().registry[e.records_graph().task(static_cast<int>(t)).type].category] +=
+      category_s[e.task_types()[e.records_graph().task(static_cast<int>(t)).type].category] +=
           1e-9 * static_cast<double>(r.end_ns - r.start_ns);
     }
   }

@@ -272,9 +272,9 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   summary.snapshots = restart ? state.snapshots_written : 0;
   if (config.output.dump_task_graph) {
     // One file per rank: each rank's graph holds its own sends and receives.
-    tasks::write_dot(engine.graph(), engine.task_types().registry,
+    tasks::write_dot(engine.graph(), engine.task_types(),
                      config.output.directory + "/task_graph" + rank_suffix + ".dot");
-    tasks::write_dependency_csv(engine.graph(), engine.task_types().registry,
+    tasks::write_dependency_csv(engine.graph(), engine.task_types(),
                                 fmt::format("{}/dependency_graph_{}.csv", config.output.directory, engine.rank()));
   }
   if (!restart) write();
@@ -400,7 +400,7 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
       fmt::print(stderr, "step {:6d}  t = {:<12.6g} dt = {:<11.4g} active = {:<8d} {}wall = {:.3f} ms\n", s.step,
                  s.time, s.dt, s.active, s.rebuilt ? "rebuilt " : "", 1e3 * s.wall_s);
     if (dump_timeline && s.active > 0 && s.step % config.output.dump_timeline_every == 0)
-      tasks::write_timeline_csv(engine.records_graph(), engine.task_types().registry, engine.last_records(),
+      tasks::write_timeline_csv(engine.records_graph(), engine.task_types(), engine.last_records(),
                                 engine.rank(), s.step,
                                 fmt::format("{}/timeline_step{:06d}{}.csv", config.output.directory, s.step, rank_suffix),
                                 exchange_interval());

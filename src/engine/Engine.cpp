@@ -10,13 +10,19 @@
 #include "core/IdealGas.hpp"
 #include "core/Error.hpp"
 #include "cooling/CoolingLoop.hpp"
+#include "cooling/CoolingTasks.hpp"
+#include "feedback/FeedbackTasks.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
 #include "gravity/GravityLoop.hpp"
+#include "gravity/GravityTasks.hpp"
 #include "hydro/HydroLoops.hpp"
+#include "hydro/HydroTasks.hpp"
 #include "star_formation/StarFormationLoop.hpp"
+#include "star_formation/StarFormationTasks.hpp"
 #include "tasks/ThreadPinning.hpp"
 #include "timestep/Integration.hpp"
+#include "timestep/IntegrationTasks.hpp"
 
 namespace fountain {
 
@@ -65,7 +71,88 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   // and change particles anywhere: those runs keep every rank's copy whole.
   halo_mode_ = ranks_ && !config_.gravity.enabled && !config_.star_formation.enabled;
   if (config_.star_formation.enabled) setup_star_formation();
+  register_tasks();
   guess_smoothing_lengths();
+}
+
+void Engine::register_tasks() {
+  const integration::IntegrationTaskTypes step = integration::register_tasks(tasks_, *ctx_);
+  const hydro::HydroTaskTypes sph = hydro::register_tasks(tasks_, *ctx_, step.drift, step.kick_close);
+  if (config_.gravity.enabled) gravity::register_tasks(tasks_, *ctx_, step.drift);
+  if (cooling_) cooling::register_tasks(tasks_, *ctx_);
+  int star_formation_done = -1;
+  if (sf_) {
+    const auto formation = star_formation::register_tasks(tasks_, *ctx_, *sf_, *fb_);
+    const auto feedback = feedback::register_tasks(tasks_, *ctx_, *fb_, formation.done);
+    star_formation_done = formation.done;
+    if (ranks_) {
+      // Feedback reads neighbours in any leaf, as star formation left them; it is their only
+      // reader before the exchange after the graph, so with no site on any rank (a run before
+      // its first stars) one sum replaces both exchanges.
+      tasks_[formation.done].run = [this](const tasks::Task&) {
+        long long sites = 0;
+        for (int c : space_.leaves())
+          if (mine(c)) sites += static_cast<long long>(fb_->cells[static_cast<std::size_t>(c)].sites.size());
+        feedback_sites_anywhere_ = ranks_->sum(sites) > 0;
+        if (feedback_sites_anywhere_) sync_owned_cells(true);
+      };
+      TaskKind::Run apply = tasks_[feedback.apply].run;
+      tasks_[feedback.apply].run = [this, apply](const tasks::Task& t) {
+        if (feedback_sites_anywhere_) sync_feedback_sites();
+        apply(t);
+      };
+    }
+  }
+  if (ranks_) register_exchange_tasks(step.drift, step.kick_close, sph.ghost, sph.force, star_formation_done);
+}
+
+void Engine::register_exchange_tasks(int drift, int kick_close, int ghost, int force, int star_formation_done) {
+  // A leaf's ghost results are sent once its ghost is done; a foreign leaf's arrive by a
+  // receive that its readers wait for. A receive runs only once its message is in (the
+  // executor polls for it), so no worker blocks and every rank's sends go out.
+  TaskKind send = TaskKind::leaf({"send", "ghost", "mpi"}, Stage::Exchange, [this](const tasks::Task& t) {
+    domain::RankExchange::Buffer b;
+    b.reserve(ghost_results_bytes(space_, t.ci));
+    MessageWriter w(b);
+    pack_ghost_results(w, space_, gas_, t.ci);
+    // Each send keeps its buffer until it completes: copies for all but the last rank.
+    const std::vector<int>& to = send_to_[static_cast<std::size_t>(t.ci)];
+    for (std::size_t k = 0; k + 1 < to.size(); ++k) ranks_->post_send(to[k], t.ci, b);
+    if (!to.empty()) ranks_->post_send(to.back(), t.ci, std::move(b));
+  });
+  TaskKind recv = TaskKind::leaf({"recv", "ghost", "mpi"}, Stage::Exchange, [this](const tasks::Task& t) {
+    const auto& b = ranks_->wait_recv(recv_handle_[static_cast<std::size_t>(t.ci)]);
+    MessageReader r(b);
+    unpack_ghost_results(r, space_, gas_, t.ci);
+  });
+  for (TaskKind* k : {&send, &recv}) {
+    k->gas_leaves_only = true;
+    // Explicit edges, not the leaf's write chain: a send that is not listed this run must
+    // not cut the chain from the ghost to the force loop.
+    k->writes_leaf = false;
+    k->activation = TaskKind::Activation::Custom;
+  }
+  send.active_if = [this](int c) { return ghost_exchange_ && !send_to_[static_cast<std::size_t>(c)].empty(); };
+  recv.active_if = [this](int c) { return ghost_exchange_ && need_recv_[static_cast<std::size_t>(c)] != 0; };
+  send_type_ = tasks_.add(std::move(send));
+  recv_type_ = tasks_.add(std::move(recv));
+  tasks_.link([=, send = send_type_, recv = recv_type_](GraphBuilder& g) {
+    for (int c : g.leaves()) {
+      // Across ranks, the end of star formation brings in every other rank's leaves: no
+      // drift of a foreign leaf may still be running then.
+      if (star_formation_done >= 0) g.depends(g.task(drift, c), g.step_tasks(star_formation_done).front());
+      const int s = g.task(send, c);
+      if (s < 0) continue;
+      g.depends(g.task(ghost, c), s);
+      g.depends(g.task(drift, c), g.task(recv, c));
+      g.depends(s, g.task(kick_close, c));
+    }
+    for (int c : g.leaves()) {
+      const int f = g.task(force, c);
+      if (f < 0) continue;
+      for (int n : g.neighbours(c)) g.depends(g.task(recv, n), f);
+    }
+  });
 }
 
 Engine::~Engine() = default;
@@ -212,6 +299,42 @@ void Engine::remove_dissolved() {
   if (keep.size() != gas_.size()) gas_.permute(keep);
 }
 
+namespace {
+
+// The graph being built, as the modules' linkers see it.
+class EngineGraphBuilder final : public GraphBuilder {
+ public:
+  EngineGraphBuilder(tasks::TaskGraph& graph, const Space& space, const StepTasks& kinds,
+                     const std::vector<std::vector<int>>& leaf_tasks, const std::vector<std::vector<int>>& step_tasks,
+                     const std::vector<std::pair<int, int>>& cell_tasks)
+      : graph_(graph), space_(space), kinds_(kinds), leaf_tasks_(leaf_tasks), step_tasks_(step_tasks),
+        cell_tasks_(cell_tasks) {}
+  const std::vector<int>& leaves() const override { return space_.leaves(); }
+  const std::vector<int>& neighbours(int c) const override { return space_.neighbours(c); }
+  int task(int type, int c) const override {
+    const auto& per_cell = leaf_tasks_[static_cast<std::size_t>(type)];
+    return per_cell.empty() ? -1 : per_cell[static_cast<std::size_t>(c)];
+  }
+  const std::vector<int>& step_tasks(int type) const override { return step_tasks_[static_cast<std::size_t>(type)]; }
+  int first_after(Stage stage, int c) const override {
+    const auto [begin, end] = cell_tasks_[static_cast<std::size_t>(c)];
+    for (int t = begin; t < end; ++t)
+      if (kinds_[graph_.task(t).type].stage > stage) return t;
+    return -1;
+  }
+  void depends(int before, int after) override { graph_.depends(before, after); }
+
+ private:
+  tasks::TaskGraph& graph_;
+  const Space& space_;
+  const StepTasks& kinds_;
+  const std::vector<std::vector<int>>& leaf_tasks_;
+  const std::vector<std::vector<int>>& step_tasks_;
+  const std::vector<std::pair<int, int>>& cell_tasks_;
+};
+
+}  // namespace
+
 void Engine::build_graph() {
   // Keep the graph the last records index into, for timelines written after this rebuild.
   if (!records_.empty() && !records_stale_) {
@@ -221,94 +344,39 @@ void Engine::build_graph() {
   graph_ = tasks::TaskGraph();
   const auto& leaves = space_.leaves();
   const std::size_t ncells = space_.cells().size();
-  std::vector<int> drift(ncells, -1), ghost(ncells, -1), kick_close(ncells, -1);
-  // Star formation: every cell's conversion, then (after all of them) each cell's search
-  // for hot neighbours, then one task hands feedback out in a fixed order, before any cell
-  // cools or opens its next step.
-  const bool star_formation = sf_ != nullptr;
-  star_formation_done_task_ = star_formation ? graph_.add(types_.star_formation_done, -1, -1, -1) : -1;
-  feedback_apply_task_ = star_formation ? graph_.add(types_.feedback_apply, -1, -1, -1) : -1;
-  // Direct, so the order holds on a rank that lists no search in between (both exchange
-  // with the other ranks, which call them in this order).
-  if (star_formation) graph_.depends(star_formation_done_task_, feedback_apply_task_);
-  if (star_formation) fb_->cells.assign(ncells, {});
-  // The density and force tasks of a cell read its neighbour cells: (task, reader) edges.
-  struct Reader { int task, ci; };
-  std::vector<Reader> dreaders, freaders;
-  std::size_t npairs = 0;
+  if (fb_) fb_->cells.assign(ncells, {});
+  // Each leaf's tasks in stage order (the order of registration within a stage).
+  std::vector<int> leaf_kinds, step_kinds;
+  for (int type = 0; type < tasks_.size(); ++type)
+    (tasks_[type].scope == TaskKind::Scope::Leaf ? leaf_kinds : step_kinds).push_back(type);
+  std::stable_sort(leaf_kinds.begin(), leaf_kinds.end(), [&](int a, int b) { return tasks_[a].stage < tasks_[b].stage; });
+  std::size_t npairs = 0, nstep = 0;
   for (int c : leaves) npairs += space_.neighbours(c).size();
-  const bool gravity = config_.gravity.enabled;
-  const std::size_t refits = gravity ? gravity::GravityTree::kRefitGroups : 0;
-  graph_.reserve(9 * leaves.size() + 3 + refits, 3 * npairs + (3 + refits) * leaves.size());
-  // One tree per step, from every cell's drifted particles, refitted in parts; each cell's
-  // walk reads it.
-  gravity_tree_task_ = gravity ? graph_.add(types_.gravity_tree, -1, -1, -1) : -1;
-  refit_tasks_.clear();
-  if (gravity)
-    for (int g = 0; g < gravity::GravityTree::kRefitGroups; ++g) {
-      const int t = graph_.add(types_.gravity_refit, -1, -1, -1);
-      graph_.task(t).part = g;
-      graph_.depends(t, gravity_tree_task_);
-      refit_tasks_.push_back(t);
+  for (int type : step_kinds) nstep += static_cast<std::size_t>(tasks_[type].parts);
+  graph_.reserve(leaf_kinds.size() * leaves.size() + nstep, 3 * npairs + (3 + nstep) * leaves.size());
+  leaf_tasks_.assign(static_cast<std::size_t>(tasks_.size()), {});
+  step_task_ids_.assign(static_cast<std::size_t>(tasks_.size()), {});
+  for (int type : step_kinds)
+    for (int part = 0; part < tasks_[type].parts; ++part) {
+      const int t = graph_.add(type, -1, -1, -1);
+      graph_.task(t).part = tasks_[type].parts > 1 ? part : -1;
+      step_task_ids_[static_cast<std::size_t>(type)].push_back(t);
     }
-  dreaders.reserve(leaves.size());
-  freaders.reserve(leaves.size());
+  for (int type : leaf_kinds) leaf_tasks_[static_cast<std::size_t>(type)].assign(ncells, -1);
   cell_tasks_.assign(ncells, {-1, -1});
-  // Across ranks: a cell's ghost results are sent once its ghost is done; a foreign cell's
-  // arrive by a receive that its readers wait for. A receive runs only once its message is
-  // in (the executor polls for it), so no worker blocks and every rank's sends go out.
-  send_task_.assign(ncells, -1);
-  recv_task_.assign(ncells, -1);
   for (int c : leaves) {
     cell_tasks_[c].first = graph_.size();
-    drift[c] = graph_.add(types_.drift, c, -1, c);
-    // Across ranks, the end of star formation brings in every other rank's cells: no drift
-    // of a foreign cell may still be running then.
-    if (star_formation && ranks_) graph_.depends(drift[c], star_formation_done_task_);
-    if (space_.cell(c).count > 0) {
-      dreaders.push_back({graph_.add(types_.density, c, -1, c), c});
-      ghost[c] = graph_.add(types_.ghost, c, -1, c);
-      if (ranks_) {
-        // Explicit edges, not the cell's write chain: a send that is not listed this run
-        // must not cut the chain from the ghost to the force loop.
-        send_task_[c] = graph_.add(types_.send, c, -1, -1);
-        graph_.depends(ghost[c], send_task_[c]);
-        recv_task_[c] = graph_.add(types_.recv, c, -1, -1);
-        graph_.depends(drift[c], recv_task_[c]);
-      }
-      freaders.push_back({graph_.add(types_.force, c, -1, c), c});
-    }
-    if (gravity) {
-      const int walk = graph_.add(types_.gravity, c, -1, c);
-      for (int t : refit_tasks_) graph_.depends(drift[c], t);
-      graph_.depends(gravity_tree_task_, walk);
-    }
-    kick_close[c] = graph_.add(types_.kick_close, c, -1, c);
-    if (send_task_[c] >= 0) graph_.depends(send_task_[c], kick_close[c]);
-    graph_.add(types_.timestep, c, -1, c);
     const bool has_gas = space_.cell(c).count > 0;
-    if (star_formation && has_gas) {
-      const int form = graph_.add(types_.star_formation, c, -1, c);
-      const int search = graph_.add(types_.feedback_search, c, -1, c);
-      graph_.depends(form, star_formation_done_task_);
-      graph_.depends(star_formation_done_task_, search);
-      graph_.depends(search, feedback_apply_task_);
+    for (int type : leaf_kinds) {
+      const TaskKind& kind = tasks_[type];
+      if (kind.gas_leaves_only && !has_gas) continue;
+      leaf_tasks_[static_cast<std::size_t>(type)][static_cast<std::size_t>(c)] =
+          graph_.add(type, c, -1, kind.writes_leaf ? c : -1);
     }
-    const int after_feedback = cooling_ && has_gas ? graph_.add(types_.cooling, c, -1, c) : -1;
-    const int open = graph_.add(types_.kick_open, c, -1, c);
-    if (star_formation && has_gas) graph_.depends(feedback_apply_task_, after_feedback >= 0 ? after_feedback : open);
     cell_tasks_[c].second = graph_.size();
   }
-  // Reads of a neighbour cell: after its drift (density), after its ghost (force), and
-  // before it closes its step (the kick rewrites the predicted state others read).
-  for (const auto& r : dreaders)
-    for (int n : space_.neighbours(r.ci)) graph_.depends(drift[n], r.task);
-  for (const auto& r : freaders)
-    for (int n : space_.neighbours(r.ci)) {
-      graph_.depends(ghost[n], r.task);
-      if (ranks_) graph_.depends(recv_task_[n], r.task);
-      graph_.depends(r.task, kick_close[n]);
-    }
+  EngineGraphBuilder builder(graph_, space_, tasks_, leaf_tasks_, step_task_ids_, cell_tasks_);
+  for (const auto& link : tasks_.linkers()) link(builder);
   graph_.finalize();
 }
 
@@ -339,10 +407,12 @@ std::size_t Engine::activate(Phase phase) {
   std::vector<char>& needs_drift = drifted_;
   needs_drift.assign(ncells, 0);
   std::size_t active_particles = 0;
-  // Gravity's tree needs every particle at the current time.
-  const bool gravity = config_.gravity.enabled && phase != Phase::Density;
+  // A task that reads every particle (gravity's tree) needs every leaf at the current time.
+  bool every_leaf = false;
+  for (int type = 0; type < tasks_.size(); ++type)
+    every_leaf = every_leaf || (tasks_[type].reads_every_leaf && runs_in(tasks_[type].stage, phase));
   for (int c : leaves) {
-    if (gravity) needs_drift[c] = 1;
+    if (every_leaf) needs_drift[c] = 1;
     if (space_.cell(c).ti_end_min != ti_current_) continue;
     cell_active_[c] = 1;
     needs_drift[c] = 1;
@@ -376,39 +446,28 @@ std::size_t Engine::activate(Phase phase) {
   // chain (docs/design.md), so nothing else needs to be visited.
   graph_.set_all_active(false);
   step_tasks_.clear();
-  if (gravity) {
-    gravity::plan_tree_update(*ctx_);
-    for (int t : refit_tasks_) {
+  for (int type = 0; type < tasks_.size(); ++type) {
+    const TaskKind& kind = tasks_[type];
+    if (kind.scope != TaskKind::Scope::Step || !runs_in(kind.stage, phase)) continue;
+    if (kind.before_phase) kind.before_phase();
+    for (int t : step_task_ids_[static_cast<std::size_t>(type)]) {
       graph_.task(t).active = true;
       step_tasks_.push_back(t);
     }
-    graph_.task(gravity_tree_task_).active = true;
-    step_tasks_.push_back(gravity_tree_task_);
   }
-  if (sf_ && phase == Phase::Full)
-    for (int t : {star_formation_done_task_, feedback_apply_task_}) {
-      graph_.task(t).active = true;
-      step_tasks_.push_back(t);
-    }
-  const bool exchange = ranks_ && phase != Phase::Density;
-  ghost_exchange_ = exchange;
-  if (exchange) plan_ghost_exchange();
-  auto allowed = [&](int type) {
-    if (phase == Phase::Density) return type == types_.density || type == types_.ghost;
-    if (phase == Phase::Hydro)
-      return type != types_.kick_close && type != types_.timestep && type != types_.cooling && type != types_.kick_open &&
-             type != types_.star_formation && type != types_.feedback_search;
-    return true;
-  };
+  ghost_exchange_ = ranks_ && phase != Phase::Density;
+  if (ghost_exchange_) plan_ghost_exchange();
   for (int c : leaves) {
     if (!needs_drift[c]) continue;
     const auto [begin, end] = cell_tasks_[c];
     for (int t = begin; t < end; ++t) {
       auto& task = graph_.task(t);
-      if (task.type == types_.send) task.active = exchange && !send_to_[static_cast<std::size_t>(c)].empty();
-      else if (task.type == types_.recv) task.active = exchange && need_recv_[static_cast<std::size_t>(c)];
-      else if (task.type == types_.drift) task.active = !halo_mode_ || held_[static_cast<std::size_t>(c)];
-      else task.active = cell_active_[c] && mine(c) && allowed(task.type);
+      const TaskKind& kind = tasks_[task.type];
+      switch (kind.activation) {
+        case TaskKind::Activation::DriftedLeaf: task.active = keeps_current(c); break;
+        case TaskKind::Activation::Custom: task.active = kind.active_if(c); break;
+        case TaskKind::Activation::ActiveLeaf: task.active = cell_active_[c] && mine(c) && runs_in(kind.stage, phase);
+      }
       if (task.active) step_tasks_.push_back(t);
     }
   }
@@ -453,61 +512,15 @@ void Engine::run_graph(StepInfo* info) {
   ctx_->cover_exceeded = false;
   ctx_->h_capped = 0;
   ctx_->h_max_capped = 0;
-  StepContext& ctx = *ctx_;
-  const TaskTypes& T = types_;
-  star_formation::StarFormationState* sf = sf_.get();
-  feedback::FeedbackState* fb = fb_.get();
-  if (sf) sf->time = fb->time = time();
-  const std::vector<int>& leaves = space_.leaves();
+  if (sf_) sf_->time = fb_->time = time();
   if (ranks_) post_receives();
-  auto runner = [this, &ctx, &T, sf, fb, &leaves](const tasks::Task& t) {
-    if (t.type == T.drift) integration::drift(ctx, t.ci, integration::ForceInputs::UnlessGhost);
-    else if (t.type == T.density) hydro::density(ctx, t.ci);
-    else if (t.type == T.ghost) hydro::ghost(ctx, t.ci);
-    else if (t.type == T.force) hydro::force(ctx, t.ci);
-    else if (t.type == T.gravity_refit) gravity::refit_tree_group(ctx, t.part);
-    else if (t.type == T.gravity_tree) gravity::finish_tree(ctx);
-    else if (t.type == T.gravity) gravity::walk_cell(ctx, t.ci);
-    else if (t.type == T.kick_close) integration::kick_close(ctx, t.ci);
-    else if (t.type == T.timestep) integration::timestep(ctx, t.ci);
-    else if (t.type == T.cooling) cooling::cool_cell(ctx, t.ci);
-    else if (t.type == T.kick_open) integration::kick_open(ctx, t.ci);
-    else if (t.type == T.star_formation) star_formation::form_stars(ctx, *sf, *fb, t.ci);
-    else if (t.type == T.feedback_search) feedback::find_hot_neighbours(ctx, *fb, t.ci);
-    else if (t.type == T.star_formation_done) {
-      // Feedback reads neighbours in any cell, as star formation left them; it is their only
-      // reader before the exchange after the graph, so with no site on any rank (a run before
-      // its first stars) one sum replaces both exchanges.
-      if (ranks_) {
-        long long sites = 0;
-        for (int c : leaves)
-          if (mine(c)) sites += static_cast<long long>(fb->cells[static_cast<std::size_t>(c)].sites.size());
-        feedback_sites_anywhere_ = ranks_->sum(sites) > 0;
-        if (feedback_sites_anywhere_) sync_owned_cells(true);
-      }
-    } else if (t.type == T.feedback_apply) {
-      if (ranks_ && feedback_sites_anywhere_) sync_feedback_sites();
-      feedback::apply_feedback(ctx, *fb, leaves);
-    } else if (t.type == T.send) {
-      domain::RankExchange::Buffer b;
-      b.reserve(ghost_results_bytes(space_, t.ci));
-      MessageWriter w(b);
-      pack_ghost_results(w, space_, gas_, t.ci);
-      // Each send keeps its buffer until it completes: copies for all but the last rank.
-      const std::vector<int>& to = send_to_[static_cast<std::size_t>(t.ci)];
-      for (std::size_t k = 0; k + 1 < to.size(); ++k) ranks_->post_send(to[k], t.ci, b);
-      if (!to.empty()) ranks_->post_send(to.back(), t.ci, std::move(b));
-    } else if (t.type == T.recv) {
-      const auto& b = ranks_->wait_recv(recv_handle_[static_cast<std::size_t>(t.ci)]);
-      MessageReader r(b);
-      unpack_ghost_results(r, space_, gas_, t.ci);
-    }
-  };
+  const StepTasks& kinds = tasks_;
+  auto runner = [&kinds](const tasks::Task& t) { kinds[t.type].run(t); };
   std::vector<tasks::TaskRecord>* records = record_timeline_ ? &records_ : ranks_ ? &mpi_records_ : nullptr;
   tasks::Executor::Gates gates;
   if (ranks_) {
     for (int t : step_tasks_)
-      if (graph_.task(t).type == types_.recv) gates.tasks.push_back(t);
+      if (graph_.task(t).type == recv_type_) gates.tasks.push_back(t);
     gates.poll = [this](std::span<const int> waiting, std::vector<int>& opened) { poll_receives(waiting, opened); };
     // What other ranks wait for goes first: the sends and what leads to them (the drifts,
     // density loops and ghosts of the cells that feed other ranks).
@@ -515,7 +528,7 @@ void Engine::run_graph(StepInfo* info) {
     listed_.assign(static_cast<std::size_t>(graph_.size()), 0);
     for (int t : step_tasks_) {
       listed_[static_cast<std::size_t>(t)] = 1;
-      if (graph_.task(t).type == types_.send) sends.push_back(t);
+      if (graph_.task(t).type == send_type_) sends.push_back(t);
     }
     if (!sends.empty()) gates.urgent = graph_.ancestors(sends, listed_);
   }

@@ -9,7 +9,7 @@
 #include "cooling/RadiativeCooling.hpp"
 #include "engine/RunConfig.hpp"
 #include "step/StepContext.hpp"
-#include "engine/TaskTypes.hpp"
+#include "step/StepTasks.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 #include "space/Space.hpp"
@@ -105,7 +105,7 @@ class Engine {
   const CollisionlessParticles& dark_matter() const { return dm_; }
   const Space& space() const { return space_; }
   const RunConfig& config() const { return config_; }
-  const TaskTypes& task_types() const { return types_; }
+  const tasks::TaskTypeRegistry& task_types() const { return tasks_.registry(); }
   const tasks::TaskGraph& graph() const { return graph_; }
   const std::vector<tasks::TaskRecord>& last_records() const { return records_; }
   // The graph last_records() index into: the current one, or the one the last step ran if
@@ -175,7 +175,6 @@ class Engine {
   std::uint64_t recut_bytes_sent() const { return recut_bytes_; }  // of bytes_sent(): halo mode's recuts
 
  private:
-  enum class Phase { Density, Hydro, Full };
   void rebuild();
   // Every leaf this rank keeps current, to ti_current_.
   void drift_current(integration::ForceInputs force_inputs);
@@ -184,6 +183,9 @@ class Engine {
   void collect_radiated();  // adds the cells' radiated energy of this step to the total
   void setup_star_formation();
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
+  // Each module's task types, in the order the modules run; across ranks the exchanges too.
+  void register_tasks();
+  void register_exchange_tasks(int drift, int kick_close, int ghost, int force, int star_formation_done);
   void build_graph();
   // The leaves' neighbour lists: across ranks each finds those of its share of the leaves (by
   // slot, not by owner: every rank needs every list) and share_neighbour_lists, a collective,
@@ -195,6 +197,8 @@ class Engine {
   std::size_t activate(Phase phase);
   void run_graph(StepInfo* info);
   void guess_smoothing_lengths();
+  // Whether this rank keeps leaf c current (in halo mode not every leaf; else all).
+  bool keeps_current(int c) const { return !halo_mode_ || held_[static_cast<std::size_t>(c)]; }
   bool mine(int c) const { return owner_.empty() || owner_[static_cast<std::size_t>(c)] == rank_; }
   std::vector<std::pair<Vec3, double>> measured_work() const;  // (leaf centre, task ns) over all ranks
   void assign_owners(const std::vector<std::pair<Vec3, double>>& measured);
@@ -240,7 +244,8 @@ class Engine {
   CollisionlessParticles dm_;
   Space space_;
   TimeLine timeline_;
-  TaskTypes types_;
+  StepTasks tasks_;
+  int send_type_ = -1, recv_type_ = -1;  // across ranks
   tasks::TaskGraph graph_;
   tasks::Executor executor_;
   std::unique_ptr<StepContext> ctx_;
@@ -252,11 +257,10 @@ class Engine {
   std::vector<char> cell_active_;
   std::vector<double> moved_;  // per cell: how far its particles moved since the rebuild (prepare_step)
   std::vector<std::pair<int, int>> cell_tasks_;  // each leaf's tasks: [first, second)
+  std::vector<std::vector<int>> leaf_tasks_;     // per task type, per cell: its task (-1: none)
+  std::vector<std::vector<int>> step_task_ids_;  // per task type: the per-step tasks
   std::vector<char> listed_;  // step_tasks_ as flags per task (the urgent tasks' search)
   std::vector<int> step_tasks_;                  // the tasks the current step runs
-  int gravity_tree_task_ = -1;
-  std::vector<int> refit_tasks_;
-  int star_formation_done_task_ = -1, feedback_apply_task_ = -1;
   bool feedback_sites_anywhere_ = true;  // across ranks: some rank has a feedback site this step
   std::unique_ptr<star_formation::StarFormationState> sf_;
   std::unique_ptr<feedback::FeedbackState> fb_;  // with star formation
@@ -278,7 +282,6 @@ class Engine {
   std::vector<int> owner_;                  // per cell; empty when running alone
   std::vector<double> leaf_cost_;           // measured task time per cell since owners were chosen (ns)
   int partitions_ = 0;
-  std::vector<int> send_task_, recv_task_;  // per cell (-1: none)
   std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
   std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run

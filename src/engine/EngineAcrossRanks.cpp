@@ -238,7 +238,7 @@ void Engine::post_receives() {
   recv_handle_.assign(space_.cells().size(), -1);
   for (int t : step_tasks_) {
     const tasks::Task& task = graph_.task(t);
-    if (task.type != types_.recv) continue;
+    if (task.type != recv_type_) continue;
     recv_handle_[static_cast<std::size_t>(task.ci)] =
         ranks_->post_recv(owner_[static_cast<std::size_t>(task.ci)], task.ci, ghost_results_bytes(space_, task.ci));
   }
@@ -344,7 +344,7 @@ void Engine::add_measured_costs() {
   for (int t : step_tasks_) {
     const tasks::Task& task = graph_.task(t);
     const tasks::TaskRecord& rec = records[static_cast<std::size_t>(t)];
-    if (task.ci < 0 || rec.thread < 0 || task.type == types_.recv) continue;
+    if (task.ci < 0 || rec.thread < 0 || task.type == recv_type_) continue;
     leaf_cost_[static_cast<std::size_t>(task.ci)] += static_cast<double>(rec.end_ns - rec.start_ns);
   }
 }
