@@ -1,0 +1,87 @@
+#include "app/OutputSchedule.hpp"
+
+#include <fmt/format.h>
+
+#include "app/Simulation.hpp"
+
+namespace fountain {
+
+OutputSchedule::OutputSchedule(const RunConfig& config, const Engine& engine, int next_output)
+    : config_(config), engine_(engine), next_(next_output) {
+  ti_out_ = ticks_of(next_);
+  skip_past();
+}
+
+IntegerTime OutputSchedule::ticks_of(int output) const {
+  const double dt_out = config_.output.delta_time;
+  if (dt_out <= 0.0) return TimeLine::ticks;
+  const double t = config_.t_begin + output * dt_out;
+  return t >= config_.t_end ? TimeLine::ticks : engine_.to_ticks(t);
+}
+
+void OutputSchedule::skip_past() {
+  while (ti_out_ <= engine_.ti_step_begin() && ti_out_ < TimeLine::ticks) ti_out_ = ticks_of(++next_);
+}
+
+void OutputSchedule::advance() {
+  ti_out_ = ticks_of(++next_);
+  skip_past();
+}
+
+SnapshotSeries::SnapshotSeries(const RunConfig& config, Engine& engine, TemperatureOf temperature, int written,
+                               bool quiet)
+    : config_(config), engine_(engine), written_(written), quiet_(quiet) {
+  info_.box_size = config.space.box_size;
+  info_.periodic = config.space.periodic;
+  info_.units = config.units;
+  info_.gamma = config.hydro.gamma;
+  info_.parameters_yaml = config.parameters_yaml;
+  info_.git_revision = git_revision();
+  info_.build_options = build_options();
+  info_.temperature = std::move(temperature);
+  info_.star_formation = config.star_formation.enabled;
+}
+
+void SnapshotSeries::write() {
+  engine_.drift_all();
+  info_.time = engine_.time();
+  info_.step = engine_.steps();
+  const std::string path =
+      fmt::format("{}/{}_{:04d}.hdf5", config_.output.directory, config_.output.basename, written_);
+  if (engine_.rank() == 0) io::write_snapshot(path, engine_.gas(), engine_.dark_matter(), info_);
+  if (!quiet_) fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info_.time);
+  ++written_;
+}
+
+StatisticsSeries::StatisticsSeries(const RunConfig& config, Engine& engine, TemperatureOf temperature, bool append)
+    : config_(config),
+      engine_(engine),
+      temperature_(std::move(temperature)),
+      phases_(analysis::FigurePhases::paper(config.units)),
+      sf_mass_before_(engine.star_formation_total().mass_formed),
+      sf_time_before_(engine.time()) {
+  if (enabled() && engine.rank() == 0)
+    file_ = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", append);
+}
+
+void StatisticsSeries::write() {
+  engine_.gather_state();  // on every rank alike, though only rank 0 writes
+  if (!file_) return;
+  const double msun_per_mass = config_.units.mass_cgs / 1.988409870698051e33;
+  const double years_per_time = config_.units.time_cgs() / 3.15576e7;
+  analysis::Diagnostics d = analysis::measure(engine_.gas(), engine_.dark_matter(), temperature_, phases_);
+  d.radiated = engine_.radiated_energy();
+  const auto& sf = engine_.star_formation_total();
+  const double elapsed = engine_.time() - sf_time_before_;
+  if (elapsed > 0.0)
+    d.sfr_msun_per_yr = (sf.mass_formed - sf_mass_before_) * msun_per_mass / (elapsed * years_per_time);
+  sf_mass_before_ = sf.mass_formed;
+  sf_time_before_ = engine_.time();
+  d.feedback_own = sf.energy_own;
+  d.feedback_reservoir = sf.energy_reservoir;
+  d.feedback_hot = sf.energy_hot;
+  d.thermal_locked = sf.thermal_locked;
+  file_->write(engine_.time(), engine_.steps(), d);
+}
+
+}  // namespace fountain
