@@ -66,10 +66,12 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   for (std::size_t i = 0; i < gas_.size(); ++i)
     if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
   ranks_ = domain::RankExchange::world();
-  if (ranks_) rank_ = ranks_->rank();
   // Gravity reads every particle (the tree), and star formation's spawning and feedback read
   // and change particles anywhere: those runs keep every rank's copy whole.
-  halo_mode_ = ranks_ && !config_.gravity.enabled && !config_.star_formation.enabled;
+  if (ranks_)
+    layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(),
+                                 !config_.gravity.enabled && !config_.star_formation.enabled,
+                                 config_.repartition_imbalance, config_.repartition_min_steps);
   if (config_.star_formation.enabled) setup_star_formation();
   register_tasks();
   guess_smoothing_lengths();
@@ -85,75 +87,11 @@ void Engine::register_tasks() {
     const auto formation = star_formation::register_tasks(tasks_, *ctx_, *sf_, *fb_);
     const auto feedback = feedback::register_tasks(tasks_, *ctx_, *fb_, formation.done);
     star_formation_done = formation.done;
-    if (ranks_) {
-      // Feedback reads neighbours in any leaf, as star formation left them; it is their only
-      // reader before the exchange after the graph, so with no site on any rank (a run before
-      // its first stars) one sum replaces both exchanges.
-      tasks_[formation.done].run = [this](const tasks::Task&) {
-        long long sites = 0;
-        for (int c : space_.leaves())
-          if (mine(c)) sites += static_cast<long long>(fb_->cells[static_cast<std::size_t>(c)].sites.size());
-        feedback_sites_anywhere_ = ranks_->sum(sites) > 0;
-        if (feedback_sites_anywhere_) sync_owned_cells(true);
-      };
-      TaskKind::Run apply = tasks_[feedback.apply].run;
-      tasks_[feedback.apply].run = [this, apply](const tasks::Task& t) {
-        if (feedback_sites_anywhere_) sync_feedback_sites();
-        apply(t);
-      };
-    }
+    if (ranks_) add_feedback_exchanges(formation.done, feedback.apply);
   }
   if (ranks_) register_exchange_tasks(step.drift, step.kick_close, sph.ghost, sph.force, star_formation_done);
 }
 
-void Engine::register_exchange_tasks(int drift, int kick_close, int ghost, int force, int star_formation_done) {
-  // A leaf's ghost results are sent once its ghost is done; a foreign leaf's arrive by a
-  // receive that its readers wait for. A receive runs only once its message is in (the
-  // executor polls for it), so no worker blocks and every rank's sends go out.
-  TaskKind send = TaskKind::leaf({"send", "ghost", "mpi"}, Stage::Exchange, [this](const tasks::Task& t) {
-    domain::RankExchange::Buffer b;
-    b.reserve(ghost_results_bytes(space_, t.ci));
-    MessageWriter w(b);
-    pack_ghost_results(w, space_, gas_, t.ci);
-    // Each send keeps its buffer until it completes: copies for all but the last rank.
-    const std::vector<int>& to = send_to_[static_cast<std::size_t>(t.ci)];
-    for (std::size_t k = 0; k + 1 < to.size(); ++k) ranks_->post_send(to[k], t.ci, b);
-    if (!to.empty()) ranks_->post_send(to.back(), t.ci, std::move(b));
-  });
-  TaskKind recv = TaskKind::leaf({"recv", "ghost", "mpi"}, Stage::Exchange, [this](const tasks::Task& t) {
-    const auto& b = ranks_->wait_recv(recv_handle_[static_cast<std::size_t>(t.ci)]);
-    MessageReader r(b);
-    unpack_ghost_results(r, space_, gas_, t.ci);
-  });
-  for (TaskKind* k : {&send, &recv}) {
-    k->gas_leaves_only = true;
-    // Explicit edges, not the leaf's write chain: a send that is not listed this run must
-    // not cut the chain from the ghost to the force loop.
-    k->writes_leaf = false;
-    k->activation = TaskKind::Activation::Custom;
-  }
-  send.active_if = [this](int c) { return ghost_exchange_ && !send_to_[static_cast<std::size_t>(c)].empty(); };
-  recv.active_if = [this](int c) { return ghost_exchange_ && need_recv_[static_cast<std::size_t>(c)] != 0; };
-  send_type_ = tasks_.add(std::move(send));
-  recv_type_ = tasks_.add(std::move(recv));
-  tasks_.link([=, send = send_type_, recv = recv_type_](GraphBuilder& g) {
-    for (int c : g.leaves()) {
-      // Across ranks, the end of star formation brings in every other rank's leaves: no
-      // drift of a foreign leaf may still be running then.
-      if (star_formation_done >= 0) g.depends(g.task(drift, c), g.step_tasks(star_formation_done).front());
-      const int s = g.task(send, c);
-      if (s < 0) continue;
-      g.depends(g.task(ghost, c), s);
-      g.depends(g.task(drift, c), g.task(recv, c));
-      g.depends(s, g.task(kick_close, c));
-    }
-    for (int c : g.leaves()) {
-      const int f = g.task(force, c);
-      if (f < 0) continue;
-      for (int n : g.neighbours(c)) g.depends(g.task(recv, n), f);
-    }
-  });
-}
 
 Engine::~Engine() = default;
 
@@ -216,7 +154,7 @@ void Engine::rebuild() {
   const ForEach for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); };
   // In halo mode every rank recuts alike from the owners' positions; then each particle that
   // a rank now holds but held no current copy of comes from the owner of the leaf it was in.
-  const bool migrate = halo_mode_ && !all_current_ && !space_.leaves().empty();
+  const bool migrate = layout_.halo_mode() && !all_current_ && !space_.leaves().empty();
   std::vector<std::size_t>& order = recut_order_;
   std::vector<int> old_leaf, old_owner;
   std::vector<std::vector<int>> old_holders;
@@ -228,13 +166,13 @@ void Engine::rebuild() {
       const Cell& cell = space_.cell(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) old_leaf[i] = c;
     }
-    old_owner = owner_;
-    old_holders = std::move(holders_);
+    old_owner = layout_.owners();
+    old_holders = layout_.take_holders();
   }
   space_.recut(gas_, dm_, for_each, migrate ? &order : nullptr);
   ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
-  if (ranks_) assign_owners(measured);
+  if (ranks_) layout_.assign_owners(space_, measured, steps_);
   // A particle whose step ends now is due; one whose step began now (a rebuild between
   // steps, as for a restart file) is not, though its bin is aligned with the time too.
   auto step_end = [&](TimeBin bin, IntegerTime ti_begin) {
@@ -244,7 +182,7 @@ void Engine::rebuild() {
   // With shared recut inputs, only the particles this rank owned have current velocities and
   // bins: each leaf's v_max and step end are taken over those here, and combined below.
   auto current = [&](std::size_t i) {
-    return !migrate || old_owner[static_cast<std::size_t>(old_leaf[order[i]])] == rank_;
+    return !migrate || old_owner[static_cast<std::size_t>(old_leaf[order[i]])] == layout_.rank();
   };
   for (int c : space_.leaves()) {
     Cell& cell = space_.cell(c);
@@ -282,8 +220,8 @@ void Engine::rebuild() {
     share_neighbour_lists();
     build_graph();
   }
-  if (halo_mode_) {
-    find_holders();
+  if (layout_.halo_mode()) {
+    layout_.find_holders(space_);
     if (migrate) migrate_after_recut(order, old_leaf, old_owner, old_holders);
     recut_bytes_ += ranks_->traffic().bytes - bytes_before;
   }
@@ -385,13 +323,13 @@ void Engine::drift_current(integration::ForceInputs force_inputs) {
   const auto& leaves = space_.leaves();
   if (leaves.empty()) return;  // before the first rebuild: nothing has moved
   StepContext& ctx = *ctx_;
-  if (!halo_mode_ || all_current_) {
+  if (!layout_.halo_mode() || all_current_) {
     executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l], force_inputs); });
     return;
   }
   std::vector<int> held;  // not only this rank's own leaves (`mine`): every leaf it keeps current
   for (int c : leaves)
-    if (held_[static_cast<std::size_t>(c)]) held.push_back(c);
+    if (layout_.keeps_current(static_cast<std::size_t>(c))) held.push_back(c);
   executor_.for_each(held.size(), [&](std::size_t l) { integration::drift(ctx, held[l], force_inputs); });
 }
 
@@ -428,7 +366,7 @@ std::size_t Engine::activate(Phase phase) {
     if (cell_active_[c]) {
       const Cell& cell = space_.cell(c);
       // In halo mode only the owner's count is sure (other copies may be stale).
-      const bool count = !halo_mode_ || mine(c);
+      const bool count = !layout_.halo_mode() || mine(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
         const bool a = ctx_->is_active(i);
         active_particles += a && count ? 1 : 0;
@@ -440,7 +378,7 @@ std::size_t Engine::activate(Phase phase) {
         if (ranks_) dm_moved_[i] = a;
       }
     }
-  if (halo_mode_) active_particles = static_cast<std::size_t>(ranks_->sum(static_cast<long long>(active_particles)));
+  if (layout_.halo_mode()) active_particles = static_cast<std::size_t>(ranks_->sum(static_cast<long long>(active_particles)));
   // Only the tasks of active cells (and the drifts of their neighbours) are listed for the
   // executor; every ordering between them is a direct dependency or runs through a listed
   // chain (docs/design.md), so nothing else needs to be visited.
@@ -555,7 +493,7 @@ void Engine::run_graph(StepInfo* info) {
   // every 1000th; `steps` counts them.
   auto warn_step = [&](long long& steps, const std::string& what) {
     ++steps;
-    if (rank_ == 0 && (steps <= 10 || steps % 1000 == 0))
+    if (layout_.rank() == 0 && (steps <= 10 || steps % 1000 == 0))
       fmt::print(stderr, "warning: {} ({} such steps{})\n", what, steps,
                  steps == 10 ? "; from here on every 1000th is printed" : "");
   };
@@ -620,7 +558,7 @@ void Engine::wake_requested() {
   if (!config_.hydro.timestep_limiter) return;
   StepContext& ctx = *ctx_;
   const auto& leaves = space_.leaves();
-  if (halo_mode_) {
+  if (layout_.halo_mode()) {
     // The owners woke their leaves in the exchange after the graph (exchange_halo); what the
     // undone kicks radiated is added here, as one rank adds it.
     for (int c : leaves) space_.cell(c).radiated = wake_radiated_[static_cast<std::size_t>(c)];

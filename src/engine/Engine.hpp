@@ -12,6 +12,7 @@
 #include "step/StepTasks.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
+#include "domain/RankLayout.hpp"
 #include "space/Space.hpp"
 #include "step/StarFormationTally.hpp"
 #include "tasks/Executor.hpp"
@@ -144,7 +145,7 @@ class Engine {
   // must call it.
   std::vector<double> from_every_rank(double mine) const;
   // How often the cut of the leaves between ranks was chosen.
-  int partitions() const { return partitions_; }
+  int partitions() const { return layout_.partitions(); }
   // Wall seconds since the start: in the task graphs, and in the exchanges after them
   // (across ranks: waiting for the slowest rank, then the cells' state).
   double graph_seconds() const { return graph_s_; }
@@ -156,10 +157,10 @@ class Engine {
   double rebuild_seconds() const { return rebuild_s_; }
   // Whether this run keeps on each rank only its own leaves and their neighbours current
   // (MPI runs without gravity and star formation: docs/design.md, "Halo mode").
-  bool halo_mode() const { return halo_mode_; }
+  bool halo_mode() const { return layout_.halo_mode(); }
   // In halo mode, the share of the leaves this rank kept current, averaged over the recuts
   // (1 otherwise): below 1, it held stale copies of the rest.
-  double held_share() const { return leaves_seen_ > 0 ? static_cast<double>(leaves_held_) / static_cast<double>(leaves_seen_) : 1.0; }
+  double held_share() const { return layout_.held_share(); }
   // Brings every particle on every rank up to date with its owner's copy (collective: every
   // rank calls it at the same point). drift_all() calls it; so must anything that reads the
   // whole state between steps across ranks (restart files, statistics). Free when alone, and
@@ -185,7 +186,10 @@ class Engine {
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   // Each module's task types, in the order the modules run; across ranks the exchanges too.
   void register_tasks();
+  // Across ranks: the ghost results' sends and receives, and the exchanges around feedback
+  // (EngineAcrossRanks.cpp).
   void register_exchange_tasks(int drift, int kick_close, int ghost, int force, int star_formation_done);
+  void add_feedback_exchanges(int star_formation_done, int feedback_apply);
   void build_graph();
   // The leaves' neighbour lists: across ranks each finds those of its share of the leaves (by
   // slot, not by owner: every rank needs every list) and share_neighbour_lists, a collective,
@@ -197,11 +201,9 @@ class Engine {
   std::size_t activate(Phase phase);
   void run_graph(StepInfo* info);
   void guess_smoothing_lengths();
-  // Whether this rank keeps leaf c current (in halo mode not every leaf; else all).
-  bool keeps_current(int c) const { return !halo_mode_ || held_[static_cast<std::size_t>(c)]; }
-  bool mine(int c) const { return owner_.empty() || owner_[static_cast<std::size_t>(c)] == rank_; }
+  bool mine(int c) const { return layout_.mine(c); }
+  bool keeps_current(int c) const { return layout_.keeps_current(c); }
   std::vector<std::pair<Vec3, double>> measured_work() const;  // (leaf centre, task ns) over all ranks
-  void assign_owners(const std::vector<std::pair<Vec3, double>>& measured);
   void plan_ghost_exchange();
   void post_receives();
   void poll_receives(std::span<const int> waiting, std::vector<int>& opened);  // the recv gates
@@ -225,7 +227,6 @@ class Engine {
   }
   void add_measured_costs();
   // Halo mode.
-  void find_holders();
   void share_recut_inputs();
   // After a recut with shared inputs: each leaf's v_max and ti_end_min, from the maxima and
   // minima each rank found over the particles it owned before the recut.
@@ -233,7 +234,6 @@ class Engine {
   void migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
                            const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders);
   void exchange_halo();
-  bool holds(int r, int c) const;
   // One all-to-all: `pack(q, w)` writes what goes to rank q, `unpack(r, reader)` reads what
   // rank r sent, which it must take whole (`what` names it if not).
   void exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
@@ -278,17 +278,11 @@ class Engine {
   bool record_timeline_ = false;
 
   std::unique_ptr<domain::RankExchange> ranks_;   // null when running alone
-  int rank_ = 0;
-  std::vector<int> owner_;                  // per cell; empty when running alone
-  std::vector<double> leaf_cost_;           // measured task time per cell since owners were chosen (ns)
-  int partitions_ = 0;
+  domain::RankLayout layout_;               // who owns and who keeps each leaf
   std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)
   std::vector<char> need_recv_;             // per cell: this rank reads its ghost results this run
   bool ghost_exchange_ = false;             // this run of the graph sends ghost results (send_to_, need_recv_ hold)
-  std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
-  std::vector<std::pair<Vec3, double>> work_since_cut_;  // (leaf centre, task ns) measured since the cut, before this interval
-  long long cut_step_ = 0;  // the step count when the cut was made
   double graph_s_ = 0.0, exchange_s_ = 0.0, rebuild_s_ = 0.0;
   std::pair<std::int64_t, std::int64_t> last_exchange_ns_{0, 0};
   std::vector<char> gas_moved_, dm_moved_;  // per particle: active in this run of the graph
@@ -297,11 +291,7 @@ class Engine {
   std::vector<char> lists_buffer_;          // this rank's share of the neighbour lists, packed for the others
   std::vector<std::size_t> recut_order_;  // a migrating recut's permutation; its buffer is kept for the next
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
-  bool halo_mode_ = false;
   bool all_current_ = true;                 // every particle here as its owner has it
-  std::vector<std::vector<int>> holders_;   // per leaf: the ranks keeping it current (sorted)
-  std::vector<char> held_;                  // per cell: this rank keeps it current
-  long long leaves_held_ = 0, leaves_seen_ = 0;  // summed over the recuts
   std::uint64_t recut_bytes_ = 0;           // sent by the recuts: their inputs, the migrations
   std::vector<char> drifted_;               // per cell: drifted in this run of the graph
   std::vector<double> wake_radiated_;       // per cell: energy radiated by the wake's undoing of kicks

@@ -1,4 +1,4 @@
-// The engine's work across MPI ranks: who owns which leaf, and what the ranks send each other (docs/design.md, "MPI").
+// The engine's work across MPI ranks: what the ranks send each other (who owns which leaf is domain/RankLayout) (docs/design.md, "MPI").
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -11,7 +11,7 @@
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
 #include "engine/Engine.hpp"
-#include "star_formation/StarFormationLoop.hpp"
+#include "feedback/FeedbackLoop.hpp"
 
 namespace fountain {
 
@@ -31,7 +31,7 @@ void Engine::poll_receives(std::span<const int> waiting, std::vector<int>& opene
 std::pair<std::vector<std::size_t>, std::vector<std::size_t>> Engine::owned_particles() const {
   std::pair<std::vector<std::size_t>, std::vector<std::size_t>> out;
   if (space_.leaves().empty()) {  // before the first recut: rank 0 speaks for all
-    if (rank_ == 0) {
+    if (layout_.rank() == 0) {
       for (std::size_t i = 0; i < gas_.size(); ++i) out.first.push_back(i);
       for (std::size_t i = 0; i < dm_.size(); ++i) out.second.push_back(i);
     }
@@ -59,7 +59,7 @@ void Engine::find_neighbour_lists(const ForEach& for_each) {
     space_.find_neighbours(for_each);
     return;
   }
-  const auto [first, last] = list_share(rank_);
+  const auto [first, last] = list_share(layout_.rank());
   space_.find_neighbours(for_each, first, last);
 }
 
@@ -68,7 +68,7 @@ void Engine::share_neighbour_lists() {
   const std::vector<int>& leaves = space_.leaves();
   lists_buffer_.clear();
   MessageWriter w(lists_buffer_);
-  const auto [first, last] = list_share(rank_);
+  const auto [first, last] = list_share(layout_.rank());
   for (std::size_t l = first; l < last; ++l)
     for (const std::vector<int>* list : {&space_.neighbours(leaves[l]), &space_.surroundings(leaves[l])}) {
       w.put(list->size());
@@ -77,7 +77,7 @@ void Engine::share_neighbour_lists() {
   const auto all = ranks_->allgather(lists_buffer_);
   std::vector<int> neighbours, surroundings;
   for (int r = 0; r < ranks_->size(); ++r) {
-    if (r == rank_) continue;
+    if (r == layout_.rank()) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
     const auto [from, to] = list_share(r);
     for (std::size_t l = from; l < to; ++l) {
@@ -91,7 +91,7 @@ void Engine::share_neighbour_lists() {
   }
 }
 
-int Engine::rank() const { return rank_; }
+int Engine::rank() const { return layout_.rank(); }
 int Engine::ranks() const { return ranks_ ? ranks_->size() : 1; }
 bool Engine::any_rank(bool yes) const { return ranks_ ? ranks_->any(yes) : yes; }
 
@@ -110,107 +110,16 @@ std::vector<std::pair<Vec3, double>> Engine::measured_work() const {
   // leaves' centres so that it can be given to the leaves of the next recut. Summed in rank
   // order from an allgather (not a reduction, whose rounding may differ between ranks).
   std::vector<std::pair<Vec3, double>> measured;
-  if (leaf_cost_.empty()) return measured;
-  std::vector<double> total(leaf_cost_.size(), 0.0);
-  for (const auto& part : ranks_->allgather_values(std::span<const double>(leaf_cost_), "cell costs"))
+  const std::vector<double>& cost = layout_.costs();
+  if (cost.empty()) return measured;
+  std::vector<double> total(cost.size(), 0.0);
+  for (const auto& part : ranks_->allgather_values(std::span<const double>(cost), "cell costs"))
     for (std::size_t c = 0; c < total.size(); ++c) total[c] += part[c];
   for (int c : space_.leaves())
     if (total[static_cast<std::size_t>(c)] > 0.0) measured.push_back({space_.cell(c).centre(), total[static_cast<std::size_t>(c)]});
   return measured;
 }
 
-void Engine::assign_owners(const std::vector<std::pair<Vec3, double>>& measured) {
-  // Owners are chosen per leaf, not per top-level cell: every rank holds every particle, so
-  // the grain of the cut is free, and the top-level grid (which changes the results, bit by
-  // bit) need not depend on the rank count. Leaves are ordered along a Hilbert curve through
-  // their centres, so each rank's leaves form a compact region.
-  const std::vector<int>& leaves = space_.leaves();
-  const std::size_t nl = leaves.size();
-  constexpr int bits = 16;
-  const double cells_per_side = static_cast<double>(1u << bits);
-  // The curve runs through a cube as wide as the box's longest side, not through the box
-  // stretched to a cube: in an elongated box (Sod's 4 x 1 x 1) a stretched curve may cut
-  // lengthwise, giving ranks four times the common surface.
-  const double side = std::max({space_.box_size().x, space_.box_size().y, space_.box_size().z});
-  std::vector<std::uint64_t> key(nl);
-  for (std::size_t l = 0; l < nl; ++l) {
-    const Vec3 x = space_.cell(leaves[l]).centre();
-    std::array<std::uint32_t, 3> q;
-    for (int k = 0; k < 3; ++k)
-      q[static_cast<std::size_t>(k)] = static_cast<std::uint32_t>(
-          std::clamp((x[k] - space_.box_lo()[k]) / side * cells_per_side, 0.0, cells_per_side - 1.0));
-    key[l] = domain::hilbert_key(q[0], q[1], q[2], bits);
-  }
-  std::vector<int> curve(nl);
-  for (std::size_t l = 0; l < nl; ++l) curve[l] = static_cast<int>(l);
-  std::sort(curve.begin(), curve.end(), [&](int a, int b) {
-    return key[static_cast<std::size_t>(a)] != key[static_cast<std::size_t>(b)] ? key[static_cast<std::size_t>(a)] < key[static_cast<std::size_t>(b)] : a < b;
-  });
-  // Work per leaf: what was measured where the leaf now is since the cut was made (the
-  // intervals between recuts are carried over), or its particle count at first. One interval
-  // is a few steps, and one task slowed by the host (a descheduled rank) could make it look
-  // 30% imbalanced: a cut redone on that (Sedov 250k, 2 ranks: 6 cuts instead of 1) moved
-  // the boundary off the blast's plane of symmetry and made the run ~10% slower.
-  std::vector<double> work(nl, 0.0);
-  std::vector<int> slot(space_.cells().size(), -1);
-  for (std::size_t l = 0; l < nl; ++l) slot[static_cast<std::size_t>(leaves[l])] = static_cast<int>(l);
-  if (measured.empty()) {
-    for (std::size_t l = 0; l < nl; ++l)
-      work[l] = static_cast<double>(space_.cell(leaves[l]).count + space_.cell(leaves[l]).dm_count);
-  } else {
-    std::vector<std::pair<Vec3, double>> since_cut;
-    since_cut.swap(work_since_cut_);
-    since_cut.insert(since_cut.end(), measured.begin(), measured.end());
-    for (const auto& [x, cost] : since_cut) {
-      int c = space_.cell_at(x);
-      while (!space_.cell(c).leaf) {  // an empty octant: the first leaf below stands in
-        int next = -1;
-        for (int ch : space_.cell(c).children)
-          if (ch >= 0 && next < 0) next = ch;
-        c = next;
-      }
-      work[static_cast<std::size_t>(slot[static_cast<std::size_t>(c)])] += cost;
-    }
-  }
-  // The cut points stay (as positions on the curve) while they still share the work well.
-  const int n = ranks_->size();
-  auto owners_from_cuts = [&] {
-    std::vector<int> own(nl);
-    for (std::size_t l = 0; l < nl; ++l)
-      own[l] = static_cast<int>(std::upper_bound(cut_keys_.begin(), cut_keys_.end(), key[l]) - cut_keys_.begin());
-    return own;
-  };
-  // A cut is judged only once it has stood for a span of steps. Judged on the few steps since
-  // the last recut, a core slowed by the host for a while made the cut follow it (Sedov 250k,
-  // 2 ranks: 12-14 cuts, each with a migration), and a cut made from the first steps' work
-  // left the ranks 12% apart for the rest of the run, where the symmetric cut from particle
-  // counts was even (docs/performance.md, domain.repartition_min_steps).
-  std::vector<int> leaf_owner;
-  if (cut_keys_.size() == static_cast<std::size_t>(n - 1)) {
-    leaf_owner = owners_from_cuts();
-    const bool judged = steps_ - cut_step_ >= config_.repartition_min_steps;
-    if (judged && domain::needs_repartition(domain::imbalance(work, leaf_owner, n), config_.repartition_imbalance))
-      leaf_owner.clear();
-  }
-  if (leaf_owner.empty()) {
-    const std::vector<int> cut = domain::partition(curve, work, n);
-    // Rank r starts at the first leaf along the curve that the cut gives to r or beyond.
-    cut_keys_.assign(static_cast<std::size_t>(n - 1), std::numeric_limits<std::uint64_t>::max());
-    for (int l : curve)
-      for (int r = 1; r <= cut[static_cast<std::size_t>(l)]; ++r)
-        cut_keys_[static_cast<std::size_t>(r - 1)] = std::min(cut_keys_[static_cast<std::size_t>(r - 1)], key[static_cast<std::size_t>(l)]);
-    leaf_owner = owners_from_cuts();
-    ++partitions_;
-    cut_step_ = steps_;
-  } else if (!measured.empty()) {
-    work_since_cut_.clear();
-    for (std::size_t l = 0; l < nl; ++l)
-      if (work[l] > 0.0) work_since_cut_.push_back({space_.cell(leaves[l]).centre(), work[l]});
-  }
-  owner_.assign(space_.cells().size(), 0);
-  for (std::size_t l = 0; l < nl; ++l) owner_[static_cast<std::size_t>(leaves[l])] = leaf_owner[l];
-  leaf_cost_.assign(space_.cells().size(), 0.0);
-}
 
 void Engine::plan_ghost_exchange() {
   const std::size_t ncells = space_.cells().size();
@@ -220,15 +129,15 @@ void Engine::plan_ghost_exchange() {
   // agree on each message without asking each other.
   for (int c : space_.leaves()) {
     if (!cell_active_[static_cast<std::size_t>(c)] || space_.cell(c).count == 0) continue;
-    const int reader = owner_[static_cast<std::size_t>(c)];
+    const int reader = layout_.owner(static_cast<std::size_t>(c));
     for (int n : space_.neighbours(c)) {
       const auto un = static_cast<std::size_t>(n);
-      if (!cell_active_[un] || owner_[un] == reader) continue;
-      if (owner_[un] == rank_) {
+      if (!cell_active_[un] || layout_.owner(un) == reader) continue;
+      if (layout_.owner(un) == layout_.rank()) {
         auto& to = send_to_[un];
         if (std::find(to.begin(), to.end(), reader) == to.end()) to.push_back(reader);
       }
-      if (reader == rank_) need_recv_[un] = 1;
+      if (reader == layout_.rank()) need_recv_[un] = 1;
     }
   }
   for (auto& to : send_to_) std::sort(to.begin(), to.end());
@@ -240,7 +149,7 @@ void Engine::post_receives() {
     const tasks::Task& task = graph_.task(t);
     if (task.type != recv_type_) continue;
     recv_handle_[static_cast<std::size_t>(task.ci)] =
-        ranks_->post_recv(owner_[static_cast<std::size_t>(task.ci)], task.ci, ghost_results_bytes(space_, task.ci));
+        ranks_->post_recv(layout_.owner(static_cast<std::size_t>(task.ci)), task.ci, ghost_results_bytes(space_, task.ci));
   }
 }
 
@@ -251,15 +160,15 @@ void Engine::exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buf
   // leaf by leaf without being told which leaves they hold.
   auto sends = [&](int c, int r) {
     const auto uc = static_cast<std::size_t>(c);
-    return (every_leaf || cell_active_[uc]) && owner_[uc] == r && (!gas_leaves_only || space_.cell(c).count > 0);
+    return (every_leaf || cell_active_[uc]) && layout_.owner(uc) == r && (!gas_leaves_only || space_.cell(c).count > 0);
   };
   buffer.clear();  // keeps its capacity from step to step
   MessageWriter w(buffer);
   for (int c : space_.leaves())
-    if (sends(c, rank_)) pack(w, c);
+    if (sends(c, layout_.rank())) pack(w, c);
   const auto all = ranks_->allgather(buffer);
   for (int r = 0; r < ranks_->size(); ++r) {
-    if (r == rank_) continue;
+    if (r == layout_.rank()) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
     for (int c : space_.leaves())
       if (sends(c, r)) unpack(in, c);
@@ -300,7 +209,7 @@ void Engine::combine_wake_requests() {
   });
   const auto all = ranks_->allgather(wake_buffer_);
   for (int r = 0; r < ranks_->size(); ++r) {
-    if (r == rank_) continue;
+    if (r == layout_.rank()) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
     while (!in.done()) {
       const auto i = in.get<std::uint64_t>();
@@ -313,7 +222,7 @@ void Engine::combine_wake_requests() {
 }
 
 void Engine::gather_state() {
-  if (!halo_mode_ || all_current_ || space_.leaves().empty()) return;
+  if (!layout_.halo_mode() || all_current_ || space_.leaves().empty()) return;
   exchange_active_leaves(
       false, sync_buffer_, [&](MessageWriter& w, int c) { pack_cell_state(w, space_, gas_, dm_, c, {}, {}); },
       [&](MessageReader& r, int c) { unpack_cell_state(r, space_, gas_, dm_, c, {}, {}); }, "whole state", true);
@@ -326,7 +235,7 @@ void Engine::finish_exchanges() {
   add_measured_costs();
   // What each rank's tasks changed reaches every other rank; then the decisions every rank
   // must take alike (recut the cells, shorten whose steps) are made from the same data.
-  if (halo_mode_) {
+  if (layout_.halo_mode()) {
     exchange_halo();
   } else {
     sync_owned_cells(false);
@@ -340,13 +249,80 @@ void Engine::finish_exchanges() {
 
 void Engine::add_measured_costs() {
   const std::vector<tasks::TaskRecord>& records = record_timeline_ ? records_ : mpi_records_;
-  if (leaf_cost_.size() != space_.cells().size()) leaf_cost_.assign(space_.cells().size(), 0.0);
+  std::vector<double>& cost = layout_.costs_of(space_.cells().size());
   for (int t : step_tasks_) {
     const tasks::Task& task = graph_.task(t);
     const tasks::TaskRecord& rec = records[static_cast<std::size_t>(t)];
     if (task.ci < 0 || rec.thread < 0 || task.type == recv_type_) continue;
-    leaf_cost_[static_cast<std::size_t>(task.ci)] += static_cast<double>(rec.end_ns - rec.start_ns);
+    cost[static_cast<std::size_t>(task.ci)] += static_cast<double>(rec.end_ns - rec.start_ns);
   }
+}
+
+void Engine::add_feedback_exchanges(int star_formation_done, int feedback_apply) {
+  // Feedback reads neighbours in any leaf, as star formation left them; it is their only
+  // reader before the exchange after the graph, so with no site on any rank (a run before
+  // its first stars) one sum replaces both exchanges.
+  tasks_[star_formation_done].run = [this](const tasks::Task&) {
+    long long sites = 0;
+    for (int c : space_.leaves())
+      if (mine(c)) sites += static_cast<long long>(fb_->cells[static_cast<std::size_t>(c)].sites.size());
+    feedback_sites_anywhere_ = ranks_->sum(sites) > 0;
+    if (feedback_sites_anywhere_) sync_owned_cells(true);
+  };
+  TaskKind::Run apply = tasks_[feedback_apply].run;
+  tasks_[feedback_apply].run = [this, apply](const tasks::Task& t) {
+    if (feedback_sites_anywhere_) sync_feedback_sites();
+    apply(t);
+  };
+}
+
+void Engine::register_exchange_tasks(int drift, int kick_close, int ghost, int force, int star_formation_done) {
+  // A leaf's ghost results are sent once its ghost is done; a foreign leaf's arrive by a
+  // receive that its readers wait for. A receive runs only once its message is in (the
+  // executor polls for it), so no worker blocks and every rank's sends go out.
+  TaskKind send = TaskKind::leaf({"send", "ghost", "mpi"}, Stage::Exchange, [this](const tasks::Task& t) {
+    domain::RankExchange::Buffer b;
+    b.reserve(ghost_results_bytes(space_, t.ci));
+    MessageWriter w(b);
+    pack_ghost_results(w, space_, gas_, t.ci);
+    // Each send keeps its buffer until it completes: copies for all but the last rank.
+    const std::vector<int>& to = send_to_[static_cast<std::size_t>(t.ci)];
+    for (std::size_t k = 0; k + 1 < to.size(); ++k) ranks_->post_send(to[k], t.ci, b);
+    if (!to.empty()) ranks_->post_send(to.back(), t.ci, std::move(b));
+  });
+  TaskKind recv = TaskKind::leaf({"recv", "ghost", "mpi"}, Stage::Exchange, [this](const tasks::Task& t) {
+    const auto& b = ranks_->wait_recv(recv_handle_[static_cast<std::size_t>(t.ci)]);
+    MessageReader r(b);
+    unpack_ghost_results(r, space_, gas_, t.ci);
+  });
+  for (TaskKind* k : {&send, &recv}) {
+    k->gas_leaves_only = true;
+    // Explicit edges, not the leaf's write chain: a send that is not listed this run must
+    // not cut the chain from the ghost to the force loop.
+    k->writes_leaf = false;
+    k->activation = TaskKind::Activation::Custom;
+  }
+  send.active_if = [this](int c) { return ghost_exchange_ && !send_to_[static_cast<std::size_t>(c)].empty(); };
+  recv.active_if = [this](int c) { return ghost_exchange_ && need_recv_[static_cast<std::size_t>(c)] != 0; };
+  send_type_ = tasks_.add(std::move(send));
+  recv_type_ = tasks_.add(std::move(recv));
+  tasks_.link([=, send = send_type_, recv = recv_type_](GraphBuilder& g) {
+    for (int c : g.leaves()) {
+      // Across ranks, the end of star formation brings in every other rank's leaves: no
+      // drift of a foreign leaf may still be running then.
+      if (star_formation_done >= 0) g.depends(g.task(drift, c), g.step_tasks(star_formation_done).front());
+      const int s = g.task(send, c);
+      if (s < 0) continue;
+      g.depends(g.task(ghost, c), s);
+      g.depends(g.task(drift, c), g.task(recv, c));
+      g.depends(s, g.task(kick_close, c));
+    }
+    for (int c : g.leaves()) {
+      const int f = g.task(force, c);
+      if (f < 0) continue;
+      for (int n : g.neighbours(c)) g.depends(g.task(recv, n), f);
+    }
+  });
 }
 
 }  // namespace fountain

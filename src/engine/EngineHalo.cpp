@@ -10,29 +10,6 @@
 
 namespace fountain {
 
-bool Engine::holds(int r, int c) const {
-  const auto& h = holders_[static_cast<std::size_t>(c)];
-  return std::binary_search(h.begin(), h.end(), r);
-}
-
-void Engine::find_holders() {
-  // A leaf's tasks read its neighbours, and neighbourhood is symmetric (the larger cover of
-  // the two decides), so the ranks that read a leaf are the owners of its neighbours.
-  const std::size_t ncells = space_.cells().size();
-  holders_.assign(ncells, {});
-  held_.assign(ncells, 0);
-  for (int c : space_.leaves()) {
-    auto& h = holders_[static_cast<std::size_t>(c)];
-    h.push_back(owner_[static_cast<std::size_t>(c)]);
-    for (int n : space_.neighbours(c)) h.push_back(owner_[static_cast<std::size_t>(n)]);
-    std::sort(h.begin(), h.end());
-    h.erase(std::unique(h.begin(), h.end()), h.end());
-    held_[static_cast<std::size_t>(c)] = std::binary_search(h.begin(), h.end(), rank_);
-    leaves_held_ += held_[static_cast<std::size_t>(c)];
-  }
-  leaves_seen_ += static_cast<long long>(space_.leaves().size());
-}
-
 void Engine::exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
                                  const std::function<void(int, MessageReader&)>& unpack, const char* what) {
   const int n = ranks_->size();
@@ -41,11 +18,11 @@ void Engine::exchange_with_ranks(const std::function<void(int, MessageWriter&)>&
     auto& b = to_rank_[static_cast<std::size_t>(q)];
     b.clear();
     MessageWriter w(b);
-    if (q != rank_) pack(q, w);
+    if (q != layout_.rank()) pack(q, w);
   }
   const auto in = ranks_->alltoall(to_rank_);
   for (int r = 0; r < n; ++r) {
-    if (r == rank_) continue;
+    if (r == layout_.rank()) continue;
     MessageReader reader(in[static_cast<std::size_t>(r)]);
     unpack(r, reader);
     if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more {} than expected", r, what));
@@ -60,11 +37,11 @@ void Engine::share_recut_inputs() {
   exchange_with_ranks(
       [&](int q, MessageWriter& w) {
         for (int c : space_.leaves())
-          if (mine(c) && !holds(q, c)) pack_recut_inputs(w, space_, gas_, c);
+          if (mine(c) && !layout_.holds(q, c)) pack_recut_inputs(w, space_, gas_, c);
       },
       [&](int r, MessageReader& reader) {
         for (int c : space_.leaves())
-          if (owner_[static_cast<std::size_t>(c)] == r && !held_[static_cast<std::size_t>(c)])
+          if (layout_.owner(static_cast<std::size_t>(c)) == r && !layout_.keeps_current(static_cast<std::size_t>(c)))
             unpack_recut_inputs(reader, space_, gas_, c);
       },
       "recut inputs");
@@ -84,7 +61,7 @@ void Engine::combine_recut_records() {
   }
   const auto all = ranks_->allgather_values(std::span<const Record>(mine), "leaf records");
   for (int r = 0; r < ranks_->size(); ++r) {
-    if (r == rank_) continue;
+    if (r == layout_.rank()) continue;
     for (std::size_t l = 0; l < leaves.size(); ++l) {
       const Record& theirs = all[static_cast<std::size_t>(r)][l];
       Cell& cell = space_.cell(leaves[l]);
@@ -105,7 +82,7 @@ void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const st
   std::vector<int> lacking;
   for (int c : space_.leaves()) {
     const Cell& cell = space_.cell(c);
-    const auto& now = holders_[static_cast<std::size_t>(c)];
+    const auto& now = layout_.holders()[static_cast<std::size_t>(c)];
     std::size_t last = static_cast<std::size_t>(-1);
     for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
       const auto was = static_cast<std::size_t>(old_leaf[order[i]]);
@@ -118,8 +95,8 @@ void Engine::migrate_after_recut(const std::vector<std::size_t>& order, const st
       }
       const int from = old_owner[was];
       for (int q : lacking) {
-        if (from == rank_) send[static_cast<std::size_t>(q)].push_back(i);
-        if (q == rank_) recv[static_cast<std::size_t>(from)].push_back(i);
+        if (from == layout_.rank()) send[static_cast<std::size_t>(q)].push_back(i);
+        if (q == layout_.rank()) recv[static_cast<std::size_t>(from)].push_back(i);
       }
     }
   }
@@ -164,7 +141,7 @@ void Engine::exchange_halo() {
           if (!drifted_[uc] || !mine(c)) continue;
           w.put(CellUpdate::of(space_.cell(c)));
           w.put(wake_radiated_[uc]);
-          if (!holds(q, c)) continue;
+          if (!layout_.holds(q, c)) continue;
           // send_to_ is planned only for graphs that exchange ghost results.
           const bool ghost_sent =
               ghost_exchange_ && std::binary_search(send_to_[uc].begin(), send_to_[uc].end(), q);
@@ -174,10 +151,10 @@ void Engine::exchange_halo() {
       [&](int r, MessageReader& reader) {
         for (int c : leaves) {
           const auto uc = static_cast<std::size_t>(c);
-          if (!drifted_[uc] || owner_[uc] != r) continue;
+          if (!drifted_[uc] || layout_.owner(uc) != r) continue;
           reader.get<CellUpdate>().apply_to(space_.cell(c));
           wake_radiated_[uc] = reader.get<double>();
-          if (held_[uc]) unpack_moved_gas(reader, space_, gas_, c, gas_moved_, ghost_exchange_ && need_recv_[uc]);
+          if (layout_.keeps_current(uc)) unpack_moved_gas(reader, space_, gas_, c, gas_moved_, ghost_exchange_ && need_recv_[uc]);
         }
       },
       "cell state");
