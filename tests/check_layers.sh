@@ -1,7 +1,7 @@
 #!/bin/sh
 # The layers' include rules, checked over every source file: a layer includes only layers below
-# it. Physics (hydro, gravity, cooling, star formation, time integration) includes neither the
-# engine nor the app; the step's context and clock (src/step) include no physics; the task
+# it. Physics (hydro, gravity, cooling, star formation, feedback, time integration) includes neither
+# the engine nor the app, and feedback nothing of star formation; the step's context and clock (src/step) include no physics; the task
 # machinery (tasks/) includes no physics, io, engine or app; io/ nothing of the engine or the
 # app; space, particles and core no layer above them. Usage: check_layers.sh REPO_ROOT
 set -eu
@@ -23,6 +23,9 @@ rule() {
 }
 physics="hydro gravity cooling star_formation feedback timestep"
 for layer in $physics; do rule "src/$layer" engine app; done
+# Star formation calls feedback (what forms deposits its energy); feedback never star formation.
+rule src/feedback star_formation
+rule src/domain engine app
 # shellcheck disable=SC2086
 rule src/step $physics engine app io analysis ics domain
 # shellcheck disable=SC2086
