@@ -6,7 +6,7 @@
 
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
-#include "star_formation/StarFormationTally.hpp"
+#include "step/StarFormationTally.hpp"
 
 namespace fountain::io {
 

@@ -1,9 +1,10 @@
 #!/bin/sh
 # The layers' include rules, checked over every source file: a layer includes only layers below
-# it. Physics (hydro, gravity, cooling, star formation, feedback, time integration) includes neither
-# the engine nor the app, and feedback nothing of star formation; the step's context and clock (src/step) include no physics; the task
-# machinery (tasks/) includes no physics, io, engine or app; io/ nothing of the engine or the
-# app; space, particles and core no layer above them. Usage: check_layers.sh REPO_ROOT
+# it. Physics (hydro, gravity, cooling, star formation, feedback, time integration) includes
+# neither the engine nor the app, and feedback nothing of star formation; the step's context and
+# clock (src/step) include no physics; the task machinery (tasks/) includes no physics, io,
+# engine or app; io/ and domain/ nothing of the engine or the app; space, particles and core no
+# layer above them. Usage: check_layers.sh REPO_ROOT
 set -eu
 root=${1:?repo root}
 cd "$root"
