@@ -223,6 +223,7 @@ void write_fields(File& file, const std::string& group, const Store& p, const st
     }
     const Values& out = pick != nullptr ? picked : values;
     const std::string dataset = group + "/" + field.name;
+    // Positions are the one field a snapshot writes otherwise than it is held.
     if constexpr (std::is_same_v<Values, std::vector<Vec3>>) {
       if (&values == &p.x) {
         write_field(file, dataset, positions_in_box(out, info));

@@ -1,4 +1,4 @@
-// The table of particle fields against what uses it: each field reaches the snapshots, restart files and MPI messages its row names, and the user guide lists the table's snapshot datasets.
+// Each particle field reaches the snapshots, restart files and MPI messages its row of the table names; the user guide lists the table's datasets.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <hdf5.h>

@@ -1,4 +1,4 @@
-// The table of particle fields: for every field of the gas and of the collisionless particles, its names, units, description and where it is written and sent.
+// The table of particle fields: each field's names, units and description, and where it is written and sent.
 //
 // Snapshots, restart files, the MPI messages between ranks and the user guide's list of
 // snapshot datasets all come from these two tables; the stores' resize, for_each_field and
@@ -43,7 +43,7 @@ inline constexpr auto kGasFields = [] {
   using namespace message;
   using G = GasParticles;
   constexpr auto always = InSnapshots::always, with_star_formation = InSnapshots::with_star_formation;
-  // Set when a particle is made and never changed by a step: in the whole state only. Changed
+  // Set when a particle is made and never changed by a step: not in the step's state. Changed
   // by a step (star formation, feedback, gravity, integration): in every state sync.
   constexpr Messages kMadeOnce = whole_state | migration, kStepped = whole_state | step_state | migration;
   return std::tuple{
