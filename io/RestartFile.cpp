@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <concepts>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -12,7 +11,9 @@
 #include <vector>
 
 #include "core/Error.hpp"
+#include "io/FieldDatasets.hpp"
 #include "io/Hdf5File.hpp"
+#include "particles/ParticleFields.hpp"
 
 namespace fountain::io {
 
@@ -38,117 +39,18 @@ class Checksum {
   std::uint64_t hash_ = 1469598103934665603ULL;
 };
 
-// Every field of each particle type, by name, in the order it is stored and checksummed:
-// `fn(name, field)` is called once per field. A field added to a particle type must be
-// added here, or a restarted run would not continue bit for bit.
-template <class Gas, class Fn>
-  requires std::same_as<std::remove_const_t<Gas>, GasParticles>
-void for_each_field(Gas& g, Fn&& fn) {
-  fn("id", g.id);
-  fn("ti_begin", g.ti_begin);
-  fn("mass", g.mass);
-  fn("mass_initial", g.mass_initial);
-  fn("mass_stars_hidden", g.mass_stars_hidden);
-  fn("reservoir", g.reservoir);
-  fn("promoted", g.promoted);
-  fn("promotion_time", g.promotion_time);
-  fn("feedback_hot_energy", g.feedback_hot_energy);
-  fn("u_full", g.u_full);
-  fn("u", g.u);
-  fn("h", g.h);
-  fn("rho", g.rho);
-  fn("rho_msph", g.rho_msph);
-  fn("h_msph", g.h_msph);
-  fn("wcount", g.wcount);
-  fn("wcount_dh", g.wcount_dh);
-  fn("div_v", g.div_v);
-  fn("soundspeed", g.soundspeed);
-  fn("p_over_rho_a", g.p_over_rho_a);
-  fn("inv_rho_2ma", g.inv_rho_2ma);
-  fn("balsara", g.balsara);
-  fn("du_dt", g.du_dt);
-  fn("du_dt_cool", g.du_dt_cool);
-  fn("v_sig", g.v_sig);
-  fn("potential", g.potential);
-  fn("x", g.x);
-  fn("v_full", g.v_full);
-  fn("v", g.v);
-  fn("curl_v", g.curl_v);
-  fn("a_hydro", g.a_hydro);
-  fn("a_grav", g.a_grav);
-  fn("time_bin", g.time_bin);
-  fn("courant_bin", g.courant_bin);
-  fn("limit_bin", g.limit_bin);
-  fn("wake_bin", g.wake_bin);
-}
-
-template <class Dm, class Fn>
-  requires std::same_as<std::remove_const_t<Dm>, CollisionlessParticles>
-void for_each_field(Dm& d, Fn&& fn) {
-  fn("id", d.id);
-  fn("species", d.species);
-  fn("birth_time", d.birth_time);
-  fn("parent_id", d.parent_id);
-  fn("ti_begin", d.ti_begin);
-  fn("mass", d.mass);
-  fn("potential", d.potential);
-  fn("x", d.x);
-  fn("v_full", d.v_full);
-  fn("v", d.v);
-  fn("a_grav", d.a_grav);
-  fn("time_bin", d.time_bin);
+// The fields of a store that restart files hold, in table order (the order they are stored
+// and checksummed in): `fn(name, field)` once per field. Every other field is a new particle's
+// value after a read.
+template <class Particles, class Fn>
+void for_each_restart_field(Particles& p, Fn&& fn) {
+  for_each_field_of(p, [&](const FieldInfo& field, auto& values) {
+    if (field.restart) fn(field.key, values);
+  });
 }
 
 constexpr const char* kGasGroup = "/Gas";
 constexpr const char* kDarkMatterGroup = "/DarkMatter";
-
-// ---- One field in the file (integer times as uint64, time bins as int32) -------------------
-
-void write_field(hdf5::File& f, const std::string& name, const std::vector<double>& v) { f.write_dataset(name, v); }
-void write_field(hdf5::File& f, const std::string& name, const std::vector<Vec3>& v) { f.write_dataset(name, v); }
-void write_field(hdf5::File& f, const std::string& name, const std::vector<std::uint64_t>& v) {
-  f.write_dataset(name, v);
-}
-void write_field(hdf5::File& f, const std::string& name, const std::vector<std::int64_t>& v) {
-  f.write_dataset(name, std::vector<std::uint64_t>(v.begin(), v.end()));
-}
-void write_field(hdf5::File& f, const std::string& name, const std::vector<TimeBin>& v) {
-  f.write_dataset(name, std::vector<std::int32_t>(v.begin(), v.end()));
-}
-void write_field(hdf5::File& f, const std::string& name, const std::vector<std::uint8_t>& v) {
-  f.write_dataset(name, std::vector<std::int32_t>(v.begin(), v.end()));
-}
-void write_field(hdf5::File& f, const std::string& name, const std::vector<Species>& v) {
-  std::vector<std::int32_t> raw(v.size());
-  for (std::size_t k = 0; k < v.size(); ++k) raw[k] = static_cast<std::int32_t>(v[k]);
-  f.write_dataset(name, raw);
-}
-
-void read_field(const hdf5::File& f, const std::string& name, std::vector<double>& v) { v = f.read_doubles(name); }
-void read_field(const hdf5::File& f, const std::string& name, std::vector<Vec3>& v) { v = f.read_vec3(name); }
-void read_field(const hdf5::File& f, const std::string& name, std::vector<std::uint64_t>& v) {
-  v = f.read_uint64(name);
-}
-void read_field(const hdf5::File& f, const std::string& name, std::vector<std::int64_t>& v) {
-  const std::vector<std::uint64_t> raw = f.read_uint64(name);
-  v.assign(raw.size(), 0);
-  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<std::int64_t>(raw[k]);
-}
-void read_field(const hdf5::File& f, const std::string& name, std::vector<TimeBin>& v) {
-  const std::vector<double> raw = f.read_doubles(name);
-  v.assign(raw.size(), 0);
-  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<TimeBin>(raw[k]);
-}
-void read_field(const hdf5::File& f, const std::string& name, std::vector<std::uint8_t>& v) {
-  const std::vector<double> raw = f.read_doubles(name);
-  v.assign(raw.size(), 0);
-  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<std::uint8_t>(raw[k]);
-}
-void read_field(const hdf5::File& f, const std::string& name, std::vector<Species>& v) {
-  const std::vector<double> raw = f.read_doubles(name);
-  v.assign(raw.size(), Species::DarkMatter);
-  for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<Species>(static_cast<int>(raw[k]));
-}
 
 // The star formation tally as numbers, in a fixed order (stored as one attribute).
 std::vector<double> tally_values(const star_formation::StarFormationTally& t) {
@@ -170,13 +72,13 @@ star_formation::StarFormationTally tally_from(const std::vector<double>& v) {
 
 template <class Particles>
 void add_to_checksum(Checksum& c, const Particles& p) {
-  for_each_field(p, [&](const char*, const auto& field) { c.add(field); });
+  for_each_restart_field(p, [&](const char*, const auto& field) { c.add(field); });
 }
 
 template <class Particles>
 void write_particles(hdf5::File& f, const std::string& group, const Particles& p) {
   f.create_group(group);
-  for_each_field(p, [&](const char* name, const auto& field) { write_field(f, group + "/" + name, field); });
+  for_each_restart_field(p, [&](const char* name, const auto& field) { write_field(f, group + "/" + name, field); });
 }
 
 // Reads every field of `group`; each must hold `count` entries (the count in /Restart).
@@ -184,7 +86,7 @@ template <class Particles>
 Particles read_particles(const hdf5::File& f, const std::string& path, const std::string& group,
                          std::uint64_t count, const char* noun) {
   Particles p;
-  for_each_field(p, [&](const char* name, auto& field) {
+  for_each_restart_field(p, [&](const char* name, auto& field) {
     const std::string dataset = group + "/" + name;
     if (!f.exists(dataset)) throw InputError(fmt::format("{}: {} not found (restart file incomplete)", path, dataset));
     read_field(f, dataset, field);
@@ -192,6 +94,7 @@ Particles read_particles(const hdf5::File& f, const std::string& path, const std
       throw InputError(fmt::format("{}: {} has {} entries, but the file holds {} {} particles", path, dataset,
                                    field.size(), count, noun));
   });
+  p.resize(count);  // the fields restart files do not hold
   return p;
 }
 
@@ -264,9 +167,9 @@ void place(Particles& whole, Particles& part, const std::vector<std::uint64_t>& 
     filled[index[k]] = 1;
   }
   std::vector<const void*> from;
-  for_each_field(part, [&](const char*, auto& field) { from.push_back(&field); });
+  for_each_restart_field(part, [&](const char*, auto& field) { from.push_back(&field); });
   std::size_t f = 0;
-  for_each_field(whole, [&](const char*, auto& field) {
+  for_each_restart_field(whole, [&](const char*, auto& field) {
     using V = std::decay_t<decltype(field)>;
     const V& src = *static_cast<const V*>(from[f++]);
     for (std::size_t k = 0; k < index.size(); ++k) field[index[k]] = src[k];

@@ -13,7 +13,9 @@ namespace fountain::io {
 // 3: dark matter (/DarkMatter), gas a_grav and potential, particle counts in /Restart.
 // 6: hybrid gas fields, stars among the collisionless particles, star formation tally.
 // 7: the integer time at which the step in progress began (TiStepBegin).
-inline constexpr int kRestartFormatVersion = 7;
+// 8: the particle fields stored and checksummed in the order of the table of particle fields
+//    (particles/ParticleFields.hpp), the fields it flags for restarts.
+inline constexpr int kRestartFormatVersion = 8;
 
 struct RestartState {
   GasParticles gas;
@@ -33,7 +35,8 @@ struct RestartState {
 };
 
 // Writes atomically (temporary file, then rename). Every field of the gas (/Gas) and of the
-// collisionless particles, dark matter and stars (/DarkMatter) is stored, with the particle counts, a format version and a
+// collisionless particles, dark matter and stars (/DarkMatter) that the table of particle fields
+// flags for restarts is stored under its key, with the particle counts, a format version and a
 // checksum over all of it.
 void write_restart(const std::string& path, const RestartState& state);
 

@@ -29,12 +29,15 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
 #include "core/Error.hpp"
 #include "core/PeriodicWrap.hpp"
+#include "io/FieldDatasets.hpp"
 #include "io/Hdf5File.hpp"
+#include "particles/ParticleFields.hpp"
 
 namespace fountain::io {
 
@@ -151,11 +154,6 @@ std::vector<std::pair<std::string, std::string>> flatten_yaml(const std::string&
 
 // ---- SWIFT-style unit attributes ---------------------------------------------------------
 
-struct Dimensions {
-  double mass = 0, length = 0, time = 0;
-  double a_scale = 0;  // SWIFT's comoving-to-physical exponent
-};
-
 std::string exponent_term(const char* symbol, double e) {
   if (e == 0.0) return "";
   if (e == 1.0) return fmt::format(" {}", symbol);
@@ -163,7 +161,7 @@ std::string exponent_term(const char* symbol, double e) {
 }
 
 void write_dataset_units(File& file, const std::string& dataset, const Units& units, const Dimensions& d,
-                         const std::string& description) {
+                         double gamma, const std::string& description) {
   const double factor = std::pow(units.mass_cgs, d.mass) * std::pow(units.length_cgs, d.length) *
                         std::pow(units.time_cgs(), d.time);
   auto one = [](double v) { return std::vector<double>{v}; };
@@ -173,31 +171,35 @@ void write_dataset_units(File& file, const std::string& dataset, const Units& un
   file.write_attribute(dataset, "U_I exponent", one(0.0));
   file.write_attribute(dataset, "U_T exponent", one(0.0));
   file.write_attribute(dataset, "h-scale exponent", one(0.0));
-  file.write_attribute(dataset, "a-scale exponent", one(d.a_scale));
+  file.write_attribute(dataset, "a-scale exponent", one(a_power(d, gamma)));
   file.write_attribute(dataset, "Conversion factor to CGS (not including cosmological corrections)", one(factor));
   // Non-cosmological runs: a = 1, so the physical factor is the same.
   file.write_attribute(dataset, "Conversion factor to physical CGS (including cosmological corrections)",
                        one(factor));
-  std::string expression = exponent_term("U_M", d.mass) + exponent_term("U_L", d.length) +
-                           exponent_term("U_t", d.time);
-  expression = expression.empty() ? "[ - ]" : trim(expression);
-  file.write_attribute(dataset, "Expression for physical CGS units", expression);
+  file.write_attribute(dataset, "Expression for physical CGS units", unit_expression(d));
   file.write_attribute(dataset, "Description", description);
 }
 
-template <class T>
-void check_size(const std::vector<T>& field, std::size_t n, const char* species, const char* name) {
-  if (field.size() != n)
-    throw InputError(fmt::format("{} field {} has {} entries, expected {}", species, name, field.size(), n));
+// Whether a field flagged `when` goes into a snapshot's group (of stars, or not).
+bool written(InSnapshots when, const SnapshotInfo& info, bool stars) {
+  switch (when) {
+    case InSnapshots::never: return false;
+    case InSnapshots::always: return true;
+    case InSnapshots::with_star_formation: return info.star_formation;
+    case InSnapshots::stars_only: return stars;
+  }
+  return false;
 }
 
-// Unit dimensions (mass, length, time, a-scale exponent) of the datasets written below.
-constexpr Dimensions kPosition{0, 1, 0, 1};
-constexpr Dimensions kVelocity{0, 1, -1, 0};
-constexpr Dimensions kMass{1, 0, 0, 0};
-constexpr Dimensions kNone{0, 0, 0, 0};
-constexpr Dimensions kAcceleration{0, 1, -2, 0};
-constexpr Dimensions kPotential{0, 2, -2, -1};  // SWIFT: potentials scale as 1/a
+// Every field a snapshot's group takes must hold one entry per particle.
+template <class Store>
+void check_sizes(const Store& p, const SnapshotInfo& info, bool stars, const char* store_name) {
+  for_each_field_of(p, [&](const FieldInfo& field, const auto& values) {
+    if (written(field.snapshot, info, stars) && values.size() != p.size())
+      throw InputError(fmt::format("{} field {} has {} entries, expected {}", store_name, field.key, values.size(),
+                                   p.size()));
+  });
+}
 
 // Positions as a snapshot stores them: in a periodic box, each particle's image in [0, L)
 // (a particle drifts out of the box between the recuts that fold it back).
@@ -207,39 +209,42 @@ std::vector<Vec3> positions_in_box(std::vector<Vec3> x, const SnapshotInfo& info
   return x;
 }
 
+// The table's snapshot fields of `p` as datasets of `group`: every particle, or those of `pick`.
+template <class Store>
+void write_fields(File& file, const std::string& group, const Store& p, const std::vector<std::size_t>* pick,
+                  const SnapshotInfo& info, bool stars) {
+  for_each_field_of(p, [&](const FieldInfo& field, const auto& values) {
+    if (!written(field.snapshot, info, stars)) return;
+    using Values = std::decay_t<decltype(values)>;
+    Values picked;
+    if (pick != nullptr) {
+      picked.reserve(pick->size());
+      for (std::size_t i : *pick) picked.push_back(values[i]);
+    }
+    const Values& out = pick != nullptr ? picked : values;
+    const std::string dataset = group + "/" + field.name;
+    // Positions are the one field a snapshot writes otherwise than it is held.
+    if constexpr (std::is_same_v<Values, std::vector<Vec3>>) {
+      if (&values == &p.x) {
+        write_field(file, dataset, positions_in_box(out, info));
+      } else {
+        write_field(file, dataset, out);
+      }
+    } else {
+      write_field(file, dataset, out);
+    }
+    write_dataset_units(file, dataset, info.units, field.units, info.gamma, field.description);
+  });
+}
+
 // The particles of one species as a GADGET PartType group.
 void write_collisionless(File& file, const std::string& group, const CollisionlessParticles& p, Species species,
-                         const Units& units, const SnapshotInfo& info) {
+                         const SnapshotInfo& info) {
   std::vector<std::size_t> pick;
   for (std::size_t i = 0; i < p.size(); ++i)
     if (p.species[i] == species) pick.push_back(i);
-  auto subset = [&](const auto& field) {
-    std::vector<typename std::decay_t<decltype(field)>::value_type> out;
-    out.reserve(pick.size());
-    for (std::size_t i : pick) out.push_back(field[i]);
-    return out;
-  };
-  auto ds = [&](const char* name) { return group + "/" + name; };
   file.create_group(group);
-  file.write_dataset(ds("Coordinates"), positions_in_box(subset(p.x), info));
-  write_dataset_units(file, ds("Coordinates"), units, kPosition, "Positions of the particles");
-  file.write_dataset(ds("Velocities"), subset(p.v));
-  write_dataset_units(file, ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
-  file.write_dataset(ds("Masses"), subset(p.mass));
-  write_dataset_units(file, ds("Masses"), units, kMass, "Masses of the particles");
-  file.write_dataset(ds("ParticleIDs"), subset(p.id));
-  write_dataset_units(file, ds("ParticleIDs"), units, kNone, "Unique IDs of the particles");
-  file.write_dataset(ds("Potential"), subset(p.potential));
-  write_dataset_units(file, ds("Potential"), units, kPotential,
-                      "Specific gravitational potentials of the particles at the last force computation");
-  file.write_dataset(ds("Acceleration"), subset(p.a_grav));
-  write_dataset_units(file, ds("Acceleration"), units, kAcceleration,
-                      "Gravitational accelerations of the particles at the last force computation");
-  if (species != Species::Star) return;
-  file.write_dataset(ds("BirthTime"), subset(p.birth_time));
-  write_dataset_units(file, ds("BirthTime"), units, {0, 0, 1, 0}, "Times the stars were spawned");
-  file.write_dataset(ds("ParentID"), subset(p.parent_id));
-  write_dataset_units(file, ds("ParentID"), units, kNone, "IDs of the gas particles that formed the stars");
+  write_fields(file, group, p, &pick, info, species == Species::Star);
 }
 
 void write_snapshot_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
@@ -248,26 +253,12 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
   const std::size_t n_dm = dm != nullptr ? dm->count(Species::DarkMatter) : 0;
   const std::size_t n_stars = dm != nullptr ? dm->count(Species::Star) : 0;
   try {
-    check_size(gas.mass, n, "gas", "mass");
-    check_size(gas.x, n, "gas", "x");
-    check_size(gas.v, n, "gas", "v");
-    check_size(gas.u, n, "gas", "u");
-    check_size(gas.h, n, "gas", "h");
-    check_size(gas.rho, n, "gas", "rho");
-    check_size(gas.wcount, n, "gas", "wcount");
-    check_size(gas.time_bin, n, "gas", "time_bin");
-    check_size(gas.a_grav, n, "gas", "a_grav");
-    check_size(gas.potential, n, "gas", "potential");
+    check_sizes(gas, info, false, "gas");
     if (dm != nullptr) {
-      const std::size_t nc = dm->size();
-      check_size(dm->species, nc, "collisionless", "species");
-      check_size(dm->mass, nc, "collisionless", "mass");
-      check_size(dm->x, nc, "collisionless", "x");
-      check_size(dm->v, nc, "collisionless", "v");
-      check_size(dm->a_grav, nc, "collisionless", "a_grav");
-      check_size(dm->potential, nc, "collisionless", "potential");
-      check_size(dm->birth_time, nc, "collisionless", "birth_time");
-      check_size(dm->parent_id, nc, "collisionless", "parent_id");
+      if (dm->species.size() != dm->size())
+        throw InputError(fmt::format("collisionless field species has {} entries, expected {}", dm->species.size(),
+                                     dm->size()));
+      check_sizes(*dm, info, true, "collisionless");
     }
   } catch (const InputError& e) {
     throw InputError("cannot create snapshot " + path + ": " + e.what());
@@ -310,77 +301,37 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     H5get_libversion(&major, &minor, &release);
     file.write_attribute("/Code", "HDF5 library version", fmt::format("{}.{}.{}", major, minor, release));
 
-    // /PartType0
-    const double gm1 = info.gamma - 1.0;
-    const double a_u = -3.0 * gm1;  // SWIFT's a-exponent of the specific internal energy
+    // /PartType0: the table's fields, then those worked out from them.
     file.create_group("/PartType0");
+    write_fields(file, "/PartType0", gas, nullptr, info, false);
     auto ds = [](const char* name) { return std::string("/PartType0/") + name; };
-
-    file.write_dataset(ds("Coordinates"), positions_in_box(gas.x, info));
-    write_dataset_units(file, ds("Coordinates"), units, kPosition, "Positions of the particles");
-    file.write_dataset(ds("Velocities"), gas.v);
-    write_dataset_units(file, ds("Velocities"), units, kVelocity, "Velocities of the particles (predicted)");
-    file.write_dataset(ds("Masses"), gas.mass);
-    write_dataset_units(file, ds("Masses"), units, kMass, "Masses of the particles");
-    file.write_dataset(ds("ParticleIDs"), gas.id);
-    write_dataset_units(file, ds("ParticleIDs"), units, kNone, "Unique IDs of the particles");
-    file.write_dataset(ds("InternalEnergy"), gas.u);
-    write_dataset_units(file, ds("InternalEnergy"), units, {0, 2, -2, a_u},
-                        "Specific internal energies of the particles (predicted)");
-    file.write_dataset(ds("SmoothingLength"), gas.h);
-    write_dataset_units(file, ds("SmoothingLength"), units, {0, 1, 0, 1},
-                        "Smoothing lengths (compact support radius of the kernel) of the particles");
-    file.write_dataset(ds("Density"), gas.rho);
-    write_dataset_units(file, ds("Density"), units, {1, -3, 0, -3}, "SPH densities of the particles");
+    const double gm1 = info.gamma - 1.0;
     std::vector<double> pressure(n);
     for (std::size_t i = 0; i < n; ++i) pressure[i] = gm1 * gas.rho[i] * gas.u[i];
-    file.write_dataset(ds("Pressure"), pressure);
-    write_dataset_units(file, ds("Pressure"), units, {1, -1, -2, -3.0 * info.gamma},
-                        fmt::format("Pressures of the particles, (gamma - 1) rho u with gamma = {}", info.gamma));
-    file.write_dataset(ds("NeighbourNumber"), gas.wcount);
-    write_dataset_units(file, ds("NeighbourNumber"), units, {0, 0, 0, 0},
-                        "Kernel-weighted neighbour numbers (4 pi / 3) h^3 sum W of the particles");
-    const std::vector<std::int32_t> bins(gas.time_bin.begin(), gas.time_bin.end());
-    file.write_dataset(ds("TimeBin"), bins);
-    write_dataset_units(file, ds("TimeBin"), units, {0, 0, 0, 0},
-                        "Time bins of the particles (step = 2^bin integer time units)");
+    file.write_dataset(ds(kPressureDataset.name), pressure);
+    write_dataset_units(file, ds(kPressureDataset.name), units, kPressureDataset.units, info.gamma,
+                        fmt::format("{} with gamma = {}", kPressureDataset.description, info.gamma));
     if (info.temperature) {
       std::vector<double> temperature(gas.size());
       for (std::size_t i = 0; i < gas.size(); ++i) temperature[i] = info.temperature(gas.u[i]);
-      file.write_dataset(ds("Temperature"), temperature);
-      write_dataset_units(file, ds("Temperature"), units, {0, 0, 0, 0},
-                          "Temperatures of the particles in K, with the cooling tables' mean particle mass");
-    }
-    file.write_dataset(ds("Potential"), gas.potential);
-    write_dataset_units(file, ds("Potential"), units, kPotential,
-                        "Specific gravitational potentials of the particles at the last force computation "
-                        "(0 without gravity)");
-    file.write_dataset(ds("GravAcceleration"), gas.a_grav);
-    write_dataset_units(file, ds("GravAcceleration"), units, kAcceleration,
-                        "Gravitational accelerations of the particles at the last force computation "
-                        "(0 without gravity)");
-    if (info.star_formation) {
-      file.write_dataset(ds("InitialMasses"), gas.mass_initial);
-      write_dataset_units(file, ds("InitialMasses"), units, kMass, "Gas masses at the start (thresholds for spawning and dissolving)");
-      file.write_dataset(ds("HiddenStellarMasses"), gas.mass_stars_hidden);
-      write_dataset_units(file, ds("HiddenStellarMasses"), units, kMass,
-                          "Stellar mass formed by the particle and not yet spawned (counts for gravity and inertia only)");
-      file.write_dataset(ds("FeedbackReservoir"), gas.reservoir);
-      write_dataset_units(file, ds("FeedbackReservoir"), units, {1, 2, -2, 0},
-                          "Cold-phase feedback energy held until the particle can be promoted to the hot phase");
-      file.write_dataset(ds("Promoted"), std::vector<std::int32_t>(gas.promoted.begin(), gas.promoted.end()));
-      write_dataset_units(file, ds("Promoted"), units, kNone, "1 if the particle was promoted to the hot phase by feedback");
-      file.write_dataset(ds("PromotionTime"), gas.promotion_time);
-      write_dataset_units(file, ds("PromotionTime"), units, {0, 0, 1, 0}, "Time of the last promotion (-1: never)");
+      file.write_dataset(ds(kTemperatureDataset.name), temperature);
+      write_dataset_units(file, ds(kTemperatureDataset.name), units, kTemperatureDataset.units, info.gamma,
+                          kTemperatureDataset.description);
     }
 
     // /PartType1 (dark matter) and /PartType4 (stars): MassTable stays 0, masses per particle.
-    if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, units, info);
-    if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, units, info);
+    if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, info);
+    if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, info);
   });
 }
 
 }  // namespace
+
+std::string unit_expression(const Dimensions& d) {
+  const std::string expression = exponent_term("U_M", d.mass) + exponent_term("U_L", d.length) +
+                                 exponent_term("U_t", d.time);
+  return expression.empty() ? "[ - ]" : trim(expression);
+}
 
 void write_snapshot(const std::string& path, const GasParticles& gas, const SnapshotInfo& info) {
   write_snapshot_file(path, gas, nullptr, info);

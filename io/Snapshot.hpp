@@ -6,6 +6,7 @@
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
 #include "particles/CollisionlessParticles.hpp"
+#include "particles/FieldInfo.hpp"
 #include "particles/GasParticles.hpp"
 
 namespace fountain::io {
@@ -25,14 +26,33 @@ struct SnapshotInfo {
   bool star_formation = false;  // write the hybrid gas fields (hidden stars, reservoir, promotion)
 };
 
+// The datasets of each PartType group are the fields the table of particle fields
+// (particles/ParticleFields.hpp) flags for snapshots, under the table's names and with its
+// units and descriptions, followed by the gas datasets below, worked out from the fields when
+// the snapshot is written (not stored).
+struct ComputedDataset {
+  const char* name;
+  Dimensions units;
+  const char* description;
+};
+// Pressure's description gains the run's gamma.
+inline constexpr ComputedDataset kPressureDataset{
+    "Pressure", {.mass = 1, .length = -1, .time = -2, .a_gamma = -3}, "Pressures of the particles, (gamma - 1) rho u"};
+// Written when SnapshotInfo::temperature is set (by every run).
+inline constexpr ComputedDataset kTemperatureDataset{
+    "Temperature", {}, "Temperatures of the particles in K, with the cooling tables' mean particle mass"};
+
+// SWIFT's "Expression for physical CGS units" of a dataset: "U_M U_L^-3", or "[ - ]".
+std::string unit_expression(const Dimensions& d);
+
 // Writes `path` (to a temporary name first, renamed on success, so a full disk never
 // leaves a half-written snapshot under the final name). Throws InputError naming the path
 // when the folder is not writable or a write fails.
 void write_snapshot(const std::string& path, const GasParticles& gas, const SnapshotInfo& info);
 
-// The same with dark matter: when `dm` is not empty it is written as /PartType1
-// (Coordinates, Velocities = v_full, Masses, ParticleIDs, Potential, Acceleration) and
-// counted in /Header (MassTable[1] = 0: the masses are per particle).
+// The same with the collisionless particles: when `dm` holds dark matter it is written as
+// /PartType1, stars as /PartType4, each counted in /Header (MassTable = 0: the masses are per
+// particle).
 void write_snapshot(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                     const SnapshotInfo& info);
 

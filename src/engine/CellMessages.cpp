@@ -1,7 +1,5 @@
 #include "engine/CellMessages.hpp"
 
-#include <algorithm>
-#include <array>
 #include <type_traits>
 #include <vector>
 
@@ -21,10 +19,8 @@ struct FieldSlices {
   Stream& s;
   std::size_t first, count;
   std::span<const char> flag = {};
-  std::array<const void*, 6> skip = {};  // fields left out
   template <class T>
   void operator()(std::vector<T>& f) const {
-    if (std::find(skip.begin(), skip.end(), static_cast<const void*>(&f)) != skip.end()) return;
     std::size_t n = count;
     if (!flag.empty()) {
       n = 0;
@@ -50,11 +46,6 @@ struct FieldSlices {
 using PackFields = FieldSlices<MessageWriter>;
 using UnpackFields = FieldSlices<MessageReader>;
 
-template <class F>
-void recut_fields(GasParticles& g, F&& f) {
-  f(g.x); f(g.h);
-}
-
 // One particle at a time, field by field, for scattered indices.
 template <class Stream>
 struct FieldPicks {
@@ -75,14 +66,10 @@ struct FieldPicks {
   }
 };
 
-// The wake requests never travel with a cell's state (the engine combines them apart).
-std::array<const void*, 6> gas_left_out(GasParticles& gas, StateFields fields) {
-  if (fields == StateFields::All) return {&gas.wake_bin};
-  return {&gas.wake_bin, &gas.id, &gas.mass_initial, &gas.x};
-}
-std::array<const void*, 6> dm_left_out(CollisionlessParticles& dm, StateFields fields) {
-  if (fields == StateFields::All) return {};
-  return {&dm.id, &dm.species, &dm.birth_time, &dm.parent_id, &dm.mass, &dm.x};
+// The message a cell's state travels in. The wake requests never travel with it (the engine
+// combines them apart).
+Messages state_message(StateFields fields) {
+  return fields == StateFields::All ? message::whole_state : message::step_state;
 }
 }  // namespace
 
@@ -90,8 +77,8 @@ void pack_cell_state(MessageWriter& w, const Space& space, GasParticles& gas, Co
                      std::span<const char> gas_moved, std::span<const char> dm_moved, StateFields fields) {
   const Cell& cell = space.cell(c);
   w.put(cell);
-  gas.for_each_field(PackFields{w, cell.first, cell.count, gas_moved, gas_left_out(gas, fields)});
-  dm.for_each_field(PackFields{w, cell.dm_first, cell.dm_count, dm_moved, dm_left_out(dm, fields)});
+  for_each_field_in(gas, state_message(fields), PackFields{w, cell.first, cell.count, gas_moved});
+  for_each_field_in(dm, state_message(fields), PackFields{w, cell.dm_first, cell.dm_count, dm_moved});
 }
 
 void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, CollisionlessParticles& dm, int c,
@@ -102,8 +89,8 @@ void unpack_cell_state(MessageReader& r, Space& space, GasParticles& gas, Collis
       sent.dm_count != cell.dm_count)
     throw std::logic_error("ranks disagree on a cell's particles");
   cell = sent;
-  gas.for_each_field(UnpackFields{r, cell.first, cell.count, gas_moved, gas_left_out(gas, fields)});
-  dm.for_each_field(UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved, dm_left_out(dm, fields)});
+  for_each_field_in(gas, state_message(fields), UnpackFields{r, cell.first, cell.count, gas_moved});
+  for_each_field_in(dm, state_message(fields), UnpackFields{r, cell.dm_first, cell.dm_count, dm_moved});
 }
 
 namespace {
@@ -139,20 +126,20 @@ void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, i
 
 void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
   const Cell& cell = space.cell(c);
-  recut_fields(gas, PackFields{w, cell.first, cell.count});
+  for_each_field_in(gas, message::recut_inputs, PackFields{w, cell.first, cell.count});
 }
 
 void unpack_recut_inputs(MessageReader& r, const Space& space, GasParticles& gas, int c) {
   const Cell& cell = space.cell(c);
-  recut_fields(gas, UnpackFields{r, cell.first, cell.count});
+  for_each_field_in(gas, message::recut_inputs, UnpackFields{r, cell.first, cell.count});
 }
 
 void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
-  gas.for_each_field(FieldPicks<MessageWriter>{w, indices});
+  for_each_field_in(gas, message::migration, FieldPicks<MessageWriter>{w, indices});
 }
 
 void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices) {
-  gas.for_each_field(FieldPicks<MessageReader>{r, indices});
+  for_each_field_in(gas, message::migration, FieldPicks<MessageReader>{r, indices});
 }
 
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
@@ -168,9 +155,8 @@ void unpack_ghost_results(MessageReader& r, Space& space, GasParticles& gas, int
 }
 
 std::size_t ghost_results_bytes(const Space& space, int c) {
-  std::size_t per = 0;
-  GasParticles none;
-  ghost_fields(none, [&](auto& f) { per += sizeof(typename std::decay_t<decltype(f)>::value_type); });
+  constexpr std::size_t per = bytes_per_particle_in<GasParticles>(message::ghost_density | message::ghost_bin |
+                                                                   message::ghost_force_inputs);
   return sizeof(double) + per * space.cell(c).count;
 }
 

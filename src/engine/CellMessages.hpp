@@ -10,6 +10,7 @@
 
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
+#include "particles/ParticleFields.hpp"
 #include "space/Space.hpp"
 #include "feedback/FeedbackLoop.hpp"
 
@@ -106,25 +107,26 @@ struct CellUpdate {
 // The gas fields that a step of a run without gravity and star formation changes other than
 // by the drift (which every rank holding a copy repeats alike). The rest stay as they are
 // between recuts in such a run: identity and masses (and the star formation fields) do not
-// change, positions change by the drift alone, and gravity's fields are unused. Listed
-// field by field so that a field added to GasParticles must be placed (a test checks).
+// change, positions change by the drift alone, and gravity's fields are unused. Which field
+// travels where is a column of the table of particle fields (particles/ParticleFields.hpp;
+// a test checks that each gas field is sent, derived or known not to change).
 // They are the ghost's results (ghost_fields, which a ghost message carries whole for the
 // force loops of its graph) and what later tasks change. Between graphs a holder needs none
 // of the derived fields (GasParticles::for_each_derived_field): its own drift of the leaf
 // works them out again before anything reads them.
 template <class F>
 void halo_ghost_fields(GasParticles& g, F&& f) {
-  f(g.h); f(g.rho); f(g.wcount); f(g.wcount_dh); f(g.div_v); f(g.curl_v);
+  for_each_field_in(g, message::ghost_density, f);
 }
 template <class F>
 void ghost_fields(GasParticles& g, F&& f) {
-  halo_ghost_fields(g, f);
-  f(g.courant_bin); f(g.soundspeed); f(g.p_over_rho_a); f(g.inv_rho_2ma); f(g.balsara);
+  for_each_field_in(g, message::ghost_density, f);
+  for_each_field_in(g, message::ghost_bin, f);
+  for_each_field_in(g, message::ghost_force_inputs, f);
 }
 template <class F>
 void step_fields_after_ghost(GasParticles& g, F&& f) {
-  f(g.v_full); f(g.u_full); f(g.v); f(g.u); f(g.a_hydro); f(g.du_dt); f(g.du_dt_cool); f(g.v_sig);
-  f(g.time_bin); f(g.ti_begin); f(g.limit_bin);
+  for_each_field_in(g, message::halo_after_ghost, f);
 }
 template <class F>
 void halo_step_fields(GasParticles& g, F&& f) {

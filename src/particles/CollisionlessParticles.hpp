@@ -4,8 +4,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/ForEach.hpp"
 #include "core/Vec3.hpp"
-#include "particles/GasParticles.hpp"
+#include "particles/TimeBin.hpp"
 
 namespace fountain {
 
@@ -17,7 +18,8 @@ inline const char* species_name(Species s) { return s == Species::Star ? "star" 
 // the gravitational acceleration, on their own individual timesteps. They share one store
 // (and one index range per cell) because every task treats them alike; only softening and
 // outputs tell them apart. In a comoving run x will be the comoving position and v_full the
-// integrator's velocity variable, as for the gas.
+// integrator's velocity variable, as for the gas. Each field has a row in the table of
+// particle fields (kCollisionlessFields, particles/ParticleFields.hpp).
 struct CollisionlessParticles {
   std::vector<std::uint64_t> id;
   std::vector<Species> species;
@@ -36,19 +38,12 @@ struct CollisionlessParticles {
 
   std::size_t size() const { return id.size(); }
 
-  void resize(std::size_t n) {
-    id.resize(n); species.resize(n, Species::DarkMatter); birth_time.resize(n); parent_id.resize(n);
-    mass.resize(n); x.resize(n); v_full.resize(n); v.resize(n);
-    a_grav.resize(n); potential.resize(n);
-    time_bin.resize(n); ti_begin.resize(n);
-  }
+  // Every field takes `n` entries; new particles take the table's initial values.
+  void resize(std::size_t n);
 
-  // Calls f(field) for every per-particle vector, in one fixed order (see GasParticles).
+  // Calls f(field) for every per-particle vector, in the table's order (see GasParticles).
   template <class F>
-  void for_each_field(F&& f) {
-    f(id); f(species); f(birth_time); f(parent_id); f(mass); f(x); f(v_full); f(v); f(a_grav); f(potential);
-    f(time_bin); f(ti_begin);
-  }
+  void for_each_field(F&& f);
 
   std::size_t count(Species s) const {
     std::size_t n = 0;
@@ -72,3 +67,6 @@ struct CollisionlessParticles {
 };
 
 }  // namespace fountain
+
+// The table of fields, and the members above that walk it (see GasParticles.hpp).
+#include "particles/ParticleFields.hpp"

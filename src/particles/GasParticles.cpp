@@ -1,8 +1,8 @@
 #include "particles/GasParticles.hpp"
 #include "particles/CollisionlessParticles.hpp"
+#include "particles/ParticleFields.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cstddef>
 #include <cstring>
 #include <type_traits>
@@ -13,10 +13,6 @@ namespace {
 // Particles per piece of a parallel gather: large enough that a piece costs far more than
 // handing it to a thread, small enough that two threads share the work evenly.
 constexpr std::size_t kReorderPiece = 4096;
-
-// The fields a permute leaves in place: room for the derived ones (filled with at(), so a
-// derived field added beyond it fails loudly).
-using FieldSet = std::array<const void*, 7>;
 
 // Whether every element has the same bytes as the first: such a field is its own permutation.
 // In a run without star formation, feedback or gravity their fields are all alike (as are
@@ -40,12 +36,12 @@ struct Reorder {
   const std::vector<char>& piece_moves;
   std::vector<std::byte>& scratch;
   const ForEach& for_each;
-  FieldSet stay = {};  // fields left in place when the length stays
+  bool derived_stay = false;  // the derived fields are left in place when the length stays
   template <class T>
-  void operator()(std::vector<T>& field) const {
+  void operator()(const FieldInfo& info, std::vector<T>& field) const {
     static_assert(std::is_trivially_copyable_v<T>);
     const std::size_t n = order.size();
-    const bool stays = std::find(stay.begin(), stay.end(), static_cast<const void*>(&field)) != stay.end();
+    const bool stays = derived_stay && info.derived;
     if (field.size() == n && (stays || all_alike(field))) return;
     if (scratch.size() < n * sizeof(T)) scratch.resize(n * sizeof(T));
     std::byte* out = scratch.data();
@@ -76,21 +72,16 @@ std::vector<char> pieces_moved(const std::vector<std::size_t>& order) {
 // Either store's permute: every field through one scratch buffer (the caller's, if given).
 template <class Store>
 void permute_fields(Store& store, const std::vector<std::size_t>& order, const ForEach& for_each,
-                    std::vector<std::byte>* scratch, FieldSet stay = {}) {
+                    std::vector<std::byte>* scratch, bool derived_stay = false) {
   std::vector<std::byte> own;
   const std::vector<char> moves = pieces_moved(order);
-  store.for_each_field(Reorder{order, moves, scratch ? *scratch : own, for_each, stay});
+  for_each_field_of(store, Reorder{order, moves, scratch ? *scratch : own, for_each, derived_stay});
 }
 }  // namespace
 
 void GasParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,
                            std::vector<std::byte>* scratch, Derived derived) {
-  FieldSet stay = {};
-  if (derived == Derived::Stay) {
-    std::size_t k = 0;
-    for_each_derived_field([&](auto& f) { stay.at(k++) = &f; });
-  }
-  permute_fields(*this, order, for_each, scratch, stay);
+  permute_fields(*this, order, for_each, scratch, derived == Derived::Stay);
 }
 
 void CollisionlessParticles::permute(const std::vector<std::size_t>& order, const ForEach& for_each,

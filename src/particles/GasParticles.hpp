@@ -6,15 +6,15 @@
 
 #include "core/ForEach.hpp"
 #include "core/Vec3.hpp"
+#include "particles/TimeBin.hpp"
 
 namespace fountain {
 
-using TimeBin = std::int8_t;
-inline constexpr TimeBin kNoBin = 127;  // no limit, no request
-
 // Every field is a separate vector so a loop touches only what it needs. Positions and
 // velocities are physical in a non-cosmological run; in a comoving run they will be the
-// comoving position and the peculiar-velocity variable of the integrator.
+// comoving position and the peculiar-velocity variable of the integrator. Each field has a row
+// in the table of particle fields (kGasFields, particles/ParticleFields.hpp), which names it
+// and says where it is written and sent.
 struct GasParticles {
   // Identity and conserved state.
   std::vector<std::uint64_t> id;
@@ -76,41 +76,21 @@ struct GasParticles {
 
   std::size_t size() const { return id.size(); }
 
-  void resize(std::size_t n) {
-    id.resize(n); mass.resize(n);
-    mass_initial.resize(n); mass_stars_hidden.resize(n); reservoir.resize(n); promoted.resize(n);
-    promotion_time.resize(n, -1.0); feedback_hot_energy.resize(n); x.resize(n); v_full.resize(n); u_full.resize(n);
-    v.resize(n); u.resize(n); h.resize(n); rho.resize(n);
-    rho_msph.resize(n); h_msph.resize(n);
-    wcount.resize(n); wcount_dh.resize(n); div_v.resize(n); curl_v.resize(n);
-    soundspeed.resize(n); p_over_rho_a.resize(n); inv_rho_2ma.resize(n); balsara.resize(n);
-    a_hydro.resize(n); du_dt.resize(n); du_dt_cool.resize(n); v_sig.resize(n); a_grav.resize(n); potential.resize(n);
-    time_bin.resize(n);
-    ti_begin.resize(n);
-    courant_bin.resize(n);
-    limit_bin.resize(n, kNoBin);
-    wake_bin.resize(n, kNoBin);
-  }
+  // Every field takes `n` entries; new particles take the table's initial values.
+  void resize(std::size_t n);
 
-  // Calls f(field) for every per-particle vector, in one fixed order (reordering, packing
-  // for other ranks): a new field is added here and in resize().
+  // Calls f(field) for every per-particle vector, in the table's order (reordering, packing
+  // for other ranks).
   template <class F>
-  void for_each_field(F&& f) {
-    f(id); f(mass); f(mass_initial); f(mass_stars_hidden); f(reservoir); f(promoted); f(promotion_time);
-    f(feedback_hot_energy); f(x); f(v_full); f(u_full); f(v); f(u); f(h); f(rho); f(rho_msph); f(h_msph);
-    f(wcount); f(wcount_dh); f(div_v); f(curl_v); f(soundspeed); f(p_over_rho_a); f(inv_rho_2ma); f(balsara);
-    f(a_hydro); f(du_dt); f(du_dt_cool); f(v_sig); f(a_grav); f(potential); f(time_bin); f(ti_begin); f(courant_bin);
-    f(limit_bin); f(wake_bin);
-  }
+  void for_each_field(F&& f);
 
-  // The derived fields: worked out again from a particle's own state before anything reads
-  // them in a step (a leaf's drift task prepares the force inputs and the MSPH rule's frozen h
-  // and density of every particle the step reads; a ghost sets the Courant bin of each
-  // particle it finishes). A recut need not move them, nor a holder receive them.
+  // The derived fields (flagged in the table): worked out again from a particle's own state
+  // before anything reads them in a step (a leaf's drift task prepares the force inputs and
+  // the MSPH rule's frozen h and density of every particle the step reads; a ghost sets the
+  // Courant bin of each particle it finishes). A recut need not move them, nor a holder
+  // receive them.
   template <class F>
-  void for_each_derived_field(F&& f) {
-    f(soundspeed); f(p_over_rho_a); f(inv_rho_2ma); f(balsara); f(rho_msph); f(h_msph); f(courant_bin);
-  }
+  void for_each_derived_field(F&& f);
 
   // Mass that gravity and inertia see: gas plus hidden stars.
   double dynamical_mass(std::size_t i) const { return mass[i] + mass_stars_hidden[i]; }
@@ -128,3 +108,7 @@ struct GasParticles {
 };
 
 }  // namespace fountain
+
+// The table of fields, and the members above that walk it: at the end, so that every user of
+// the store has them.
+#include "particles/ParticleFields.hpp"
