@@ -108,10 +108,14 @@ TEST(StarFormationLaw, EachConditionAloneBlocksFormation) {
   EXPECT_EQ(with([](auto& s) { s.temperature = 5e4; }), star_formation::Eligibility::TooHot);
 }
 
-TEST(StarFormationLaw, PromotionThresholdIsTheHigherOfTheTwoRules) {
-  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 5e5), 2e6);   // 50 T* wins
-  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 3e6), 6e6);   // 2 <T_hot> wins
-  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, -1.0), 2e6);  // none found
+TEST(StarFormationLaw, PromotionThresholdIsFiftyTStarUnlessTheHotNeighboursAreHotter) {
+  // T* = 4e4 K, 50 T* = 2e6 K.
+  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 5e5), 2e6);    // mean below 25 T*
+  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 1.5e6), 2e6);  // 25-50 T*: not 2 <T_hot> = 3e6
+  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 2e6), 2e6);    // at 50 T*: not higher
+  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 2.5e6), 5e6);  // above: 2 <T_hot>
+  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, 3e6), 6e6);
+  EXPECT_DOUBLE_EQ(feedback::promotion_temperature(4e4, 50, 2, -1.0), 2e6);   // none found
 }
 
 TEST(StarFormationLaw, FeedbackSharesAddUpToTheEnergy) {
@@ -418,11 +422,13 @@ std::size_t index_of(const GasParticles& g, std::uint64_t id) {
   return static_cast<std::size_t>(std::find(g.id.begin(), g.id.end(), id) - g.id.begin());
 }
 
-TEST(Promotion, ThresholdIsFiftyTStarOrTwiceTheHotNeighboursWhicheverIsHigher) {
-  // Hot gas at 5e5 K: 2 <T_hot> = 1e6 K < 50 T* = 2e6 K rules; at 3e6 K, 2 <T_hot> = 6e6 K does.
+TEST(Promotion, ThresholdIsFiftyTStarUnlessTheHotNeighboursAreHotterThanThat) {
+  // 50 T* = 2e6 K. Hot gas at 5e5 K or at 1.5e6 K (between 25 and 50 T*, where twice the mean,
+  // 3e6 K, would be higher): 50 T* rules. At 3e6 K, above 50 T*: 2 <T_hot> = 6e6 K rules.
   for (const auto& [t_hot, target, promoted] : std::vector<std::tuple<double, double, bool>>{
-           {5e5, 1.8e6, false}, {5e5, 2.2e6, true},     // 50 T* rules
-           {3e6, 5.5e6, false}, {3e6, 6.5e6, true}}) {  // 2 <T_hot> = 6e6 K rules
+           {5e5, 1.8e6, false}, {5e5, 2.2e6, true},      // 50 T* rules
+           {1.5e6, 1.8e6, false}, {1.5e6, 2.2e6, true},  // 50 T* rules, not 2 <T_hot>
+           {3e6, 5.5e6, false}, {3e6, 6.5e6, true}}) {   // 2 <T_hot> = 6e6 K rules
     const PromotionCase pc = promotion_case(t_hot, target);
     const GasParticles& g = pc.engine->gas();
     const std::size_t i = index_of(g, pc.id);

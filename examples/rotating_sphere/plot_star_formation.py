@@ -8,6 +8,8 @@ formation rate, and the energy budget, from each run's statistics.txt.
 
 Times in Gyr for h = 1 (the internal time unit Mpc/(km/s) is 977.8 Gyr). Phases as in the
 paper's section 3.2: hot T > 2 T*, cold T <= 2 T* and rho > 0.1 rho*, warm otherwise.
+`--warm-and-hot` plots warm + hot gas in the hot panel, as the paper's Fig 5 does for its mass
+sequence (the virial temperatures of G09-G12 differ too much for the split to mean much).
 """
 import argparse
 import os
@@ -65,6 +67,8 @@ def main():
     ap.add_argument("--table", help="also write a Markdown table of the last line's fractions here")
     ap.add_argument("--title", default="")
     ap.add_argument("--at", type=float, help="table at this time (Gyr; default: each run's last line)")
+    ap.add_argument("--warm-and-hot", action="store_true",
+                    help="the hot panel shows warm + hot gas (the paper's Fig 5)")
     a = ap.parse_args()
     labels = a.labels if a.labels else [os.path.basename(os.path.normpath(r)) for r in a.runs]
     if len(labels) != len(a.runs):
@@ -74,7 +78,8 @@ def main():
     fig, ax = plt.subplots(2, 3, figsize=(15, 8.5))
     panels = [
         (ax[0, 0], "cold gas", lambda s: s["mass_cold"] / baryons(s)),
-        (ax[0, 1], "hot gas", lambda s: s["mass_hot"] / baryons(s)),
+        (ax[0, 1], "warm + hot gas", lambda s: (s["mass_warm"] + s["mass_hot"]) / baryons(s))
+        if a.warm_and_hot else (ax[0, 1], "hot gas", lambda s: s["mass_hot"] / baryons(s)),
         (ax[0, 2], "stars (particles + hidden)", lambda s: (s["mass_stars"] + s["mass_stars_hidden"]) / baryons(s)),
         (ax[1, 1], "unbound gas", lambda s: s["mass_unbound"] / baryons(s)),
         (ax[1, 2], "promoted gas still diffuse", lambda s: s["mass_promoted_diffuse"] / baryons(s)),

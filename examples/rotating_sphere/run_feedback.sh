@@ -87,8 +87,10 @@ EOT
   run_or_resume "$dir"
 done
 
-plot() {
+plot() {  # plot NAME [--warm-and-hot] RUN...
   name=$1; shift
+  extra=""
+  [ "${1:-}" = --warm-and-hot ] && extra=$1 && shift
   dirs="" labels=""
   for r in "$@"; do
     [ -f "$out/$r/statistics.txt" ] && dirs="$dirs $out/$r" && labels="$labels $r"
@@ -96,7 +98,7 @@ plot() {
   [ -n "$dirs" ] || return 0
   # shellcheck disable=SC2086
   $py "$here/plot_star_formation.py" $dirs --labels $labels -o "$out/$name.png" --table "$out/$name.md" \
-    --title "$name, $n particles per species" --at "$t_end_gyr"
+    --title "$name, $n particles per species" --at "$t_end_gyr" $extra
 }
 plot feedback_R R01 R02 R03 R04 R05
 # G12 joins the mass sequence only beside another of its runs: R04 alone is no sequence.
@@ -104,5 +106,6 @@ if [ -f "$out/R04/statistics.txt" ] && [ ! -e "$out/G12" ] &&
   { [ -f "$out/G09/statistics.txt" ] || [ -f "$out/G10/statistics.txt" ] || [ -f "$out/G11/statistics.txt" ]; }; then
   ln -s R04 "$out/G12"
 fi
-[ -e "$out/G12" ] && plot feedback_G G09 G10 G11 G12
+# Fig 5 sums warm and hot gas, as the paper does for its mass sequence.
+[ -e "$out/G12" ] && plot feedback_G --warm-and-hot G09 G10 G11 G12
 $py "$here/compare_feedback.py" "$out" "$t_end_gyr" | tee "$out/comparison.md"

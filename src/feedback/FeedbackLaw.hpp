@@ -30,9 +30,13 @@ struct FeedbackColdPhase {
   bool contains(double rho, double u) const { return rho > rho_min && u < u_max; }
 };
 
-// T_prom = max(factor T*, hot_factor x mean T of the hot neighbours); mean_hot < 0: none found.
+// The paper's rule (its section 2.3): T_prom = factor T*, unless the mean T of the hot
+// neighbours is higher than that, when it is hot_factor x their mean. (Not the larger of the
+// two: for a mean between factor T* / hot_factor and factor T* the threshold stays factor T*.)
+// mean_hot < 0: none found.
 inline double promotion_temperature(double t_star, double factor, double hot_factor, double mean_hot) {
-  return std::max(factor * t_star, mean_hot > 0.0 ? hot_factor * mean_hot : 0.0);
+  const double base = factor * t_star;
+  return mean_hot > base ? hot_factor * mean_hot : base;
 }
 
 }  // namespace fountain::feedback

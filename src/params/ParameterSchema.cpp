@@ -109,8 +109,8 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("feedback.eps_hot", "0", 0, 1, "eps_h: fraction of e_sn given as thermal energy to the nearest hot neighbours, in proportion to mass."),
       integer("feedback.hot_neighbours", "10", 1, 1000, "How many nearest hot neighbours receive eps_h and set the promotion threshold."),
       real("feedback.max_search_radius", "0", 0, inf, "Largest distance (internal length) searched for hot neighbours; 0: no limit."),
-      real("feedback.promotion_factor", "50", 1, inf, "Promotion threshold T_prom is at least this times T*."),
-      real("feedback.promotion_hot_factor", "2", 0, inf, "T_prom is at least this times the mean temperature of the hot neighbours."),
+      real("feedback.promotion_factor", "50", 1, inf, "Promotion threshold T_prom is this times T*, unless the hot neighbours' mean temperature is higher."),
+      real("feedback.promotion_hot_factor", "2", 0, inf, "When the hot neighbours' mean temperature exceeds promotion_factor x T*, T_prom is this times that mean."),
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
       real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),
