@@ -15,7 +15,7 @@ constexpr const char* kColumns =
     "thermal_energy kinetic_energy potential_energy total_energy radiated_energy "
     "momentum_x momentum_y momentum_z angular_momentum_x angular_momentum_y angular_momentum_z "
     "mass_stars mass_stars_hidden sfr_msun_per_yr mass_promoted_diffuse reservoir_energy "
-    "feedback_own feedback_reservoir feedback_hot thermal_locked";
+    "feedback_own feedback_reservoir feedback_hot thermal_locked h_min_gas dt_min";
 }
 
 StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(path) {
@@ -28,7 +28,8 @@ StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(pat
                "rho > 0.1 rho*, warm otherwise; unbound: v^2/2 + potential > 0; mass_promoted_diffuse: "
                "gas promoted by feedback and not cold now. Conserved: total_energy + reservoir_energy + "
                "radiated_energy + thermal_locked - feedback_own - feedback_reservoir - feedback_hot (all since "
-               "the start; thermal_locked is the thermal energy of gas turned into stars).\n");
+               "the start; thermal_locked is the thermal energy of gas turned into stars). h_min_gas: the smallest gas "
+               "smoothing length; dt_min: the smallest particle timestep, both at the line's time.\n");
     fmt::print(file_, "# {}\n", kColumns);
     std::fflush(file_);
   }
@@ -44,7 +45,7 @@ void StatisticsFile::write(double time, long long step, const analysis::Diagnost
                    d.kinetic, d.potential, d.total_energy(), d.radiated, d.momentum.x, d.momentum.y, d.momentum.z,
                    d.angular_momentum.x, d.angular_momentum.y, d.angular_momentum.z, d.mass_stars, d.mass_stars_hidden,
                    d.sfr_msun_per_yr, d.mass_promoted_diffuse, d.reservoir, d.feedback_own, d.feedback_reservoir,
-                   d.feedback_hot, d.thermal_locked})
+                   d.feedback_hot, d.thermal_locked, d.h_min_gas, d.dt_min})
     line += fmt::format(" {:.10e}", x);
   line += '\n';
   const bool ok = std::fputs(line.c_str(), file_) >= 0;

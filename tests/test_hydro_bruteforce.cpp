@@ -136,6 +136,59 @@ INSTANTIATE_TEST_SUITE_P(AllSetups, HydroBruteForce,
                                          Case{Setup::OpenBoundaries, false}, Case{Setup::OpenBoundaries, true}),
                          name);
 
+// The floor of h (hydro.h_min_ratio): a particle whose neighbour number would need a smaller
+// h keeps the floor, with its density, neighbour number and forces those of the floor's
+// kernel (checked against direct sums); particles above the floor are untouched.
+TEST(SmoothingLengthFloor, HeldParticlesTakeTheFloorsKernel) {
+  std::mt19937_64 rng(7);
+  GasParticles g;
+  test::add_random(g, 1200, {0, 0, 0}, {1, 1, 1}, 1.0 / 1200, 1.0, 1.0, rng);
+  test::add_random(g, 400, {0.42, 0.42, 0.42}, {0.16, 0.16, 0.16}, 1.0 / 1200, 1.0, 0.2, rng);
+  RunConfig cfg = test::test_config(true, {1, 1, 1}, false);
+  cfg.hydro.courant_criterion = CourantCriterion::SignalVelocity;
+  const GasParticles start = g;
+  Engine free_engine(cfg, g);
+  free_engine.compute_hydro_at(0);
+  const GasParticles& free = free_engine.gas();
+  std::vector<double> hs(free.h.begin(), free.h.end());
+  std::sort(hs.begin(), hs.end());
+  // A floor above the clump's kernels and below the diffuse gas's.
+  const double floor = hs[hs.size() / 8];
+  ASSERT_GT(floor, 1.2 * hs.front());
+  ASSERT_LT(floor, 0.8 * hs.back());
+
+  cfg.hydro.h_min = floor;
+  Engine engine(cfg, start);
+  engine.compute_hydro_at(0);
+  engine.compute_hydro_at(0);  // a second solve starts from particles already at the floor
+  const GasParticles& gas = engine.gas();
+  const test::BruteForce bf{gas, cfg.hydro, true, {1, 1, 1}};
+  std::size_t held = 0;
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    ASSERT_EQ(gas.id[i], free.id[i]);
+    ASSERT_GE(gas.h[i], floor) << "particle " << gas.id[i];
+    if (free.h[i] < floor) {
+      ++held;
+      EXPECT_EQ(gas.h[i], floor) << "particle " << gas.id[i];
+      const auto ref = bf.density(i, floor);
+      EXPECT_GT(ref.wcount, cfg.hydro.neighbours) << "particle " << gas.id[i];
+      expect_close(gas.wcount[i], ref.wcount, 0.0, "neighbour number", gas.id[i]);
+      expect_close(gas.rho[i], ref.rho, 0.0, "density", gas.id[i]);
+      const auto f = bf.force(i);
+      for (int k = 0; k < 3; ++k) expect_close(gas.a_hydro[i][k], f.a[k], norm(f.a), "acceleration", gas.id[i]);
+      expect_close(gas.du_dt[i], f.du_dt, std::fabs(f.du_dt), "du/dt", gas.id[i]);
+    } else if (free.h[i] > 1.01 * floor) {
+      // Converged to the same neighbour number; the floor's neighbours differ only in their
+      // own h, so h agrees to the solver's tolerance.
+      EXPECT_NEAR(gas.h[i], free.h[i], 1e-6 * free.h[i]) << "particle " << gas.id[i];
+    }
+    if (::testing::Test::HasFailure()) break;
+  }
+  EXPECT_GT(held, gas.size() / 10);
+  EXPECT_GT(engine.h_min_held(), 0);
+  EXPECT_EQ(free_engine.h_min_held(), 0);
+}
+
 // A leaf holding only dark matter has no SPH neighbours to cover: it must not ask for a
 // rebuild whenever gas moves (it did, at every step, once the collapsing sphere's halo had
 // such leaves: a sixth of a long run went into recutting the cells).

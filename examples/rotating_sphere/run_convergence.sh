@@ -7,13 +7,17 @@
 #   sh examples/rotating_sphere/run_convergence.sh            # all six runs, then the plots
 #   SIZES="2000" SCHEMES="msph" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
 #   JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # two runs at a time
+#   MODE=paper JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # the paper's settings
 #
 # With JOBS > 1, that many runs go at once (largest first, each taking the next run left when
 # it finishes; the last run goes on with all the workers' threads once the others are idle):
 # on 2 cores, two 1-thread runs side by side finish the study sooner than one 2-thread run
 # after another, as a single run's second thread idles in its serial parts.
-# Runs go to examples/rotating_sphere/output/<N>_<scheme>/ ($OUTPUT/<N>_<scheme>/ if set) and
-# the figures to docs/validation/ ($DOCS if set); a finished run is not redone.
+# MODE: default (Fountain's settings) or paper (the paper's: no timestep limiter, dt_min 1e-8,
+# a floor of h; run_or_resume.sh says which values). Runs go to
+# examples/rotating_sphere/output/<N>_<scheme>/ (MODE=paper: output/paper/<N>_<scheme>/;
+# $OUTPUT/<N>_<scheme>/ if set) and the figures to docs/validation/ (MODE=paper:
+# docs/validation/paper/; $DOCS if set); a finished run is not redone.
 # Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
 # the time unit is 977.8 Gyr, so 1.2 Gyr is t = 1.227e-3.
 set -eu
@@ -23,7 +27,14 @@ root=$(cd "$here/../.." && pwd)
 # FOUNTAIN_BIN: the executable (default build/fountain, built if missing).
 bin=${FOUNTAIN_BIN:-$root/build/fountain}
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
-out=${OUTPUT:-$here/output}
+set_mode
+if [ "$mode" = paper ]; then
+  out=${OUTPUT:-$here/output/paper}
+  docs=${DOCS:-$root/docs/validation/paper}
+else
+  out=${OUTPUT:-$here/output}
+  docs=${DOCS:-$root/docs/validation}
+fi
 mkdir -p "$out"
 threads=${THREADS:-2}
 jobs=${JOBS:-1}
@@ -45,7 +56,7 @@ for n in ${SIZES:-2000 4000 8000}; do
     msph=false
     [ "$scheme" = msph ] && msph=true
     cat > "$dir/params.yml" <<EOT
-# Rotating sphere, $n particles per species, $scheme, cooling on, star formation off.
+# Rotating sphere, $n particles per species, $scheme, cooling on, star formation off ($mode settings).
 run:
   t_end: 1.227e-3
 initial_conditions:
@@ -58,9 +69,11 @@ restart:
   every_minutes: 10
 time_integration:
   dt_max: 1.0e-6
-  dt_min: 1.0e-12
+  dt_min: $dt_min
+  timestep_limiter: $limiter
 hydro:
   msph: $msph
+  h_min_ratio: $h_min_ratio
 gravity:
   enabled: true
   softening_dark_matter: $eps
@@ -114,4 +127,5 @@ else
   for pid in $pids; do wait "$pid" || failed=$?; done
   [ "$failed" -eq 0 ] || exit "$failed"
 fi
-/usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "${DOCS:-$root/docs/validation}"
+mkdir -p "$docs"
+/usr/bin/python3 "$here/plot_convergence.py" "$out" --docs "$docs"

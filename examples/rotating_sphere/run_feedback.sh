@@ -9,11 +9,13 @@
 #
 #   sh examples/rotating_sphere/run_feedback.sh                     # all, then the plots
 #   RUNS="R02 R04" N=2000 T_END=0.6 sh examples/rotating_sphere/run_feedback.sh
+#   MODE=paper sh examples/rotating_sphere/run_feedback.sh          # the paper's settings
 #
 # N: particles per species (default 4000; the softening is scaled as N^(-1/3) from 1.5 kpc/h
 # at 4000). T_END: Gyr (default 2, h = 1). THREADS: default 2. Runs go to
-# $OUT/<run>/ (default examples/rotating_sphere/output/feedback_<N>); a finished run is not
-# redone (delete its folder to redo it), a killed one continues from its restart file.
+# $OUT/<run>/ (default examples/rotating_sphere/output/feedback_<N>, with MODE=paper
+# output/paper/feedback_<N>); a finished run is not redone (delete its folder to redo it), a
+# killed one continues from its restart file. MODE: default or paper (run_or_resume.sh).
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 . "$here/run_or_resume.sh"
@@ -25,7 +27,8 @@ bin=${FOUNTAIN_BIN:-$root/build/fountain}
 n=${N:-4000}
 t_end_gyr=${T_END:-2}
 threads=${THREADS:-2}
-out=${OUT:-$here/output/feedback_$n}
+set_mode
+if [ "$mode" = paper ]; then out=${OUT:-$here/output/paper/feedback_$n}; else out=${OUT:-$here/output/feedback_$n}; fi
 mkdir -p "$out"
 py=/usr/bin/python3
 # Internal time unit: Mpc/(km/s) = 977.8 Gyr (h = 1).
@@ -56,7 +59,7 @@ for run in ${RUNS:-R01 R02 R03 R04 R05 G09 G10 G11}; do
   [ -f "$dir/done" ] && continue
   mkdir -p "$dir"
   cat > "$dir/params.yml" <<EOT
-# $run: rotating sphere, M = $mass Msun/h, $n particles per species, eps_c = $eps_c, eps_h = $eps_h.
+# $run: rotating sphere, M = $mass Msun/h, $n particles per species, eps_c = $eps_c, eps_h = $eps_h ($mode settings).
 run:
   t_end: $t_end
 initial_conditions:
@@ -69,9 +72,11 @@ restart:
   every_minutes: 10
 time_integration:
   dt_max: 1.0e-6
-  dt_min: 1.0e-13
+  dt_min: $dt_min
+  timestep_limiter: $limiter
 hydro:
   msph: $msph
+  h_min_ratio: $h_min_ratio
 gravity:
   enabled: true
   softening_dark_matter: $eps

@@ -34,3 +34,21 @@ run_or_resume() {
     return 0
   done
 }
+
+# MODE selects the numerical settings of the sphere runs (sets $mode, $dt_min, $limiter,
+# $h_min_ratio):
+#   default: Fountain's defaults: the timestep limiter on (it also wakes the neighbours of
+#            particles that feedback heats), no floor of h, and dt_min lowered to 1e-13 so
+#            that the dense knots of the cold disc never stop a run.
+#   paper:   Marri & White (2003) section 3.1: no limiter, dt in [1e-8, 1e-6] (a particle
+#            that needs less stops the run, as GADGET does), and the floor of the smoothing
+#            length GADGET-1 offers, H_MIN_RATIO times the gas softening (default 0.5; 0: no
+#            floor).
+set_mode() {
+  mode=${MODE:-default}
+  case $mode in
+    default) dt_min=1.0e-13 limiter=true h_min_ratio=0 ;;
+    paper) dt_min=1.0e-8 limiter=false h_min_ratio=${H_MIN_RATIO:-0.5} ;;
+    *) echo "unknown MODE $mode (default or paper)" >&2; exit 2 ;;
+  esac
+}

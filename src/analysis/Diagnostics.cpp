@@ -1,12 +1,19 @@
 #include "analysis/Diagnostics.hpp"
 
+#include <algorithm>
+#include <limits>
+
 namespace fountain::analysis {
 
 Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
                     const FigurePhases& phases) {
   Diagnostics d;
+  double h_min = std::numeric_limits<double>::infinity();
+  int bin_min = std::numeric_limits<int>::max();
   for (std::size_t i = 0; i < gas.size(); ++i) {
     const double m = gas.mass[i];
+    h_min = std::min(h_min, gas.h[i]);
+    bin_min = std::min<int>(bin_min, gas.time_bin[i]);
     const double m_dyn = gas.dynamical_mass(i);  // hidden stars move with the gas
     const double v2 = dot(gas.v[i], gas.v[i]);
     d.mass_gas += m;
@@ -32,7 +39,10 @@ Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, c
     d.potential += 0.5 * m * dm.potential[i];
     d.momentum += dm.v[i] * m;
     d.angular_momentum += cross(dm.x[i], dm.v[i]) * m;
+    bin_min = std::min<int>(bin_min, dm.time_bin[i]);
   }
+  d.h_min_gas = gas.size() > 0 ? h_min : 0.0;
+  d.time_bin_min = dm.size() + gas.size() > 0 ? bin_min : 0;
   return d;
 }
 

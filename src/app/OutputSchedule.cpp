@@ -81,6 +81,7 @@ void StatisticsSeries::write() {
   d.feedback_reservoir = sf.energy_reservoir;
   d.feedback_hot = sf.energy_hot;
   d.thermal_locked = sf.thermal_locked;
+  d.dt_min = engine_.timeline().step(d.time_bin_min);
   file_->write(engine_.time(), engine_.steps(), d);
 }
 

@@ -450,6 +450,7 @@ void Engine::run_graph(StepInfo* info) {
   ctx_->cover_exceeded = false;
   ctx_->h_capped = 0;
   ctx_->h_max_capped = 0;
+  ctx_->h_min_held = 0;
   if (sf_) sf_->time = fb_->time = time();
   if (ranks_) post_receives();
   const StepTasks& kinds = tasks_;
@@ -503,6 +504,7 @@ void Engine::run_graph(StepInfo* info) {
                                            ctx_->h_capped.load(), time()));
   // Not harmless: these particles keep fewer neighbours than hydro.neighbours, so their
   // density is overestimated. Counted for the run's summary too.
+  h_min_held_particles_ += ctx_->h_min_held;
   if (ctx_->h_max_capped > 0) {
     h_max_capped_particles_ += ctx_->h_max_capped;
     warn_step(h_max_capped_steps_,

@@ -244,6 +244,7 @@ void Engine::finish_exchanges() {
   ctx_->cover_exceeded = ranks_->any(ctx_->cover_exceeded.load());
   ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));
   ctx_->h_max_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_max_capped.load())));
+  ctx_->h_min_held = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_min_held.load())));
   exchange_s_ += seconds_since(t0);
 }
 

@@ -61,6 +61,9 @@ void ghost(StepContext& ctx, int ci) {
   double h_limit = cell.r_cover - cell.dx_max - cell.dx_around;
   const bool limit_is_cover = !(p.h_max > 0.0 && p.h_max < h_limit);
   if (!limit_is_cover) h_limit = p.h_max;
+  // A particle at the floor with at least its neighbour number is settled there; should the
+  // cell's reach fall below the floor, the reach rules and the cells are rebuilt.
+  const double h_floor = std::min(p.h_min, h_limit);
   thread_local DensityPairs cand;
 
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
@@ -73,7 +76,10 @@ void ghost(StepContext& ctx, int ci) {
     s.div = gas.div_v[i];
     s.curl = gas.curl_v[i];
     DensityResult res = finish_density(s, h);
-    const bool converged = std::fabs(res.wcount - p.neighbours) <= p.neighbours_tolerance && h <= h_limit;
+    const bool at_floor = h_floor > 0.0 && h == h_floor && res.wcount >= p.neighbours - p.neighbours_tolerance;
+    const bool converged =
+        h <= h_limit && (at_floor || std::fabs(res.wcount - p.neighbours) <= p.neighbours_tolerance);
+    if (at_floor) ctx.h_min_held.fetch_add(1, std::memory_order_relaxed);
     if (!converged) {
       // h rarely changes by much in a step: bracket it within a modest radius first, and
       // search out to the cell's reach only when that radius holds too few neighbours.
@@ -115,6 +121,13 @@ void ghost(StepContext& ctx, int ci) {
           throw InputError(fmt::format("smoothing length of gas particle id {} did not converge in {} iterations "
                                        "(h = {}, neighbour number {})",
                                        gas.id[i], p.max_h_iterations, h, res.wcount));
+        if (h < h_floor) {
+          // Held at the floor: the density is that of the floor's kernel, over more neighbours.
+          if (h_floor > reach) gather_candidates(ctx, ci, i, h_floor, cand);
+          h = h_floor;
+          res = finish_density(sums_at(cand, h), h);
+          ctx.h_min_held.fetch_add(1, std::memory_order_relaxed);
+        }
       }
     }
     gas.h[i] = h;

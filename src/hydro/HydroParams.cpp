@@ -1,5 +1,8 @@
 #include "hydro/HydroParams.hpp"
 
+#include <fmt/format.h>
+
+#include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
 
 namespace fountain {
@@ -19,6 +22,20 @@ HydroParams HydroParams::from(const ParameterFile& p) {
   h.msph_A = p.real("hydro.msph_A");
   h.msph_A_prime = p.real("hydro.msph_A_prime");
   h.h_max = p.real("hydro.h_max");
+  const double ratio = p.real("hydro.h_min_ratio");
+  if (ratio > 0.0) {
+    double eps_gas = p.real("gravity.softening_gas");
+    if (eps_gas == 0.0) eps_gas = 0.5 * p.real("gravity.softening_dark_matter");
+    if (!(eps_gas > 0.0))
+      throw InputError(fmt::format("{}: key 'hydro.h_min_ratio' = {} needs a gas softening, but neither "
+                                   "'gravity.softening_gas' nor 'gravity.softening_dark_matter' is set",
+                                   p.origin(), ratio));
+    h.h_min = ratio * eps_gas;
+    if (h.h_max > 0.0 && h.h_min > h.h_max)
+      throw InputError(fmt::format("{}: the smallest smoothing length hydro.h_min_ratio x softening = {} exceeds "
+                                   "'hydro.h_max' = {}",
+                                   p.origin(), h.h_min, h.h_max));
+  }
   h.max_h_iterations = static_cast<int>(p.integer("hydro.max_h_iterations"));
   h.timestep_limiter = p.flag("time_integration.timestep_limiter");
   h.limiter_bins = static_cast<int>(p.integer("time_integration.limiter_bin_difference"));
