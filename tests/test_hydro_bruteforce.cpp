@@ -122,8 +122,10 @@ TEST_P(HydroBruteForce, LoopsMatchDirectSummation) {
   if (c.setup == Setup::ClumpInHotGas || c.setup == Setup::OpenBoundaries) {
     if (c.msph) {
       EXPECT_GT(bf.decoupled_pairs(), 100u);
+      EXPECT_GE(engine.msph_decoupled(), static_cast<long long>(bf.decoupled_pairs()));  // the force loop's own count
     } else {
       EXPECT_EQ(bf.decoupled_pairs(), 0u);
+      EXPECT_EQ(engine.msph_decoupled(), 0);
     }
   }
 }

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -209,6 +211,66 @@ TEST(CoolingSphere, RadiatedEnergyClosesTheBudget) {
   EXPECT_GT(lost, 0.3 * start.thermal);  // the gas does cool a lot in 30 Myr
   EXPECT_NEAR(radiated, lost, 0.05 * lost);
   EXPECT_LT(std::fabs(end.energy() + radiated - start.energy()), 1e-3 * std::fabs(start.energy()));
+}
+
+// The paper (section 3.2): without cooling, MSPH is standard SPH, since the rule decouples a
+// pair only across a contrast of 10 in density and in energy, which adiabatic flows hardly
+// make. The rotating sphere without cooling, past its accretion shock, in both schemes, step
+// for step: the runs must stay identical bit for bit while the rule has dropped no pair, and
+// may part only once it has.
+TEST(NonRadiativeSphere, MsphIsSphUntilTheRuleDecouplesAPair) {
+  ics::RotatingSphereParams sp;
+  sp.particles_per_species = 500;
+  const ics::RotatingSphereIC ic = ics::rotating_sphere(sp);
+  auto engine = [&](bool msph) {
+    RunConfig c;
+    c.t_end = 6.1e-4;  // 0.6 Gyr: the accretion shock forms at ~0.4 Gyr
+    c.threads = 2;
+    c.hydro.msph = msph;
+    c.integration.dt_min = 1e-12;
+    c.integration.dt_max = 1e-6;
+    c.gravity.enabled = true;
+    c.gravity.G = Units{}.gravitational_constant();
+    c.gravity.softening_dark_matter = 0.004;
+    c.gravity.softening_gas = 0.002;
+    auto e = std::make_unique<Engine>(c, ic.gas, ic.dm);
+    e->initialise();
+    return e;
+  };
+  const auto sph = engine(false), msph = engine(true);
+  const double u_start = sph->totals().thermal;
+  auto identical = [&] {
+    const GasParticles &a = sph->gas(), &b = msph->gas();
+    if (a.size() != b.size()) return false;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      if (a.id[i] != b.id[i] || !(a.x[i] == b.x[i]) || !(a.v_full[i] == b.v_full[i]) || a.u_full[i] != b.u_full[i])
+        return false;
+    return true;
+  };
+  long long steps = 0, parted_at = -1;
+  double thermal_peak = 0.0;
+  while (!sph->finished() && !msph->finished()) {
+    sph->step();
+    msph->step();
+    ++steps;
+    thermal_peak = std::max(thermal_peak, sph->totals().thermal);
+    if (parted_at < 0 && !identical()) {
+      parted_at = steps;
+      ASSERT_GT(msph->msph_decoupled(), 0) << "the schemes parted at step " << steps << " with no pair decoupled";
+    }
+    if (parted_at < 0) {
+      ASSERT_EQ(sph->time(), msph->time());
+    }
+  }
+  EXPECT_EQ(sph->msph_decoupled(), 0);
+  std::printf("Non-radiative sphere, 500 per species, %lld steps: MSPH decoupled %lld force interactions; the runs %s\n",
+              steps, msph->msph_decoupled(),
+              parted_at < 0 ? "stayed identical" : ("parted at step " + std::to_string(parted_at)).c_str());
+  // Past the accretion shock: the shocked gas has several times its starting heat.
+  EXPECT_GT(thermal_peak, 3.0 * u_start);
+  if (msph->msph_decoupled() == 0) {
+    EXPECT_LT(parted_at, 0);
+  }
 }
 
 }  // namespace

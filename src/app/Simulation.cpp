@@ -142,6 +142,7 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   summary.held_share = engine.held_share();
   summary.h_max_capped = engine.h_max_capped();
   summary.h_min_held = engine.h_min_held();
+  summary.msph_decoupled = engine.msph_decoupled();
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return summary;
 }

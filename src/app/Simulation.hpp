@@ -26,6 +26,7 @@ struct RunSummary {
   double held_share = 1.0;  // of the leaves, kept current by this rank (Engine::held_share)
   long long h_max_capped = 0;  // particle-steps held at hydro.h_max short of neighbours
   long long h_min_held = 0;    // particle-steps held at the floor of h (hydro.h_min_ratio)
+  long long msph_decoupled = 0;  // force interactions the MSPH rule dropped
 };
 
 // How `fountain run` was asked to run, beyond the parameter file.

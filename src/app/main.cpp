@@ -113,6 +113,8 @@ int main(int argc, char** argv) {
       if (mpi.rank() == 0 && s.h_max_capped > 0)
         fmt::print(stderr, "warning: {} particle-steps were held at hydro.h_max with too few neighbours\n",
                    s.h_max_capped);
+      if (mpi.rank() == 0 && s.msph_decoupled > 0)
+        fmt::print(stderr, "MSPH decoupled {} force interactions\n", s.msph_decoupled);
       if (mpi.rank() == 0 && s.h_min_held > 0)
         fmt::print(stderr, "{} particle-steps were held at the floor of h (hydro.h_min_ratio)\n", s.h_min_held);
       if (mpi.rank() == 0 && s.ranks > 1)

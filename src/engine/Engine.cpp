@@ -451,6 +451,7 @@ void Engine::run_graph(StepInfo* info) {
   ctx_->h_capped = 0;
   ctx_->h_max_capped = 0;
   ctx_->h_min_held = 0;
+  ctx_->msph_decoupled = 0;
   if (sf_) sf_->time = fb_->time = time();
   if (ranks_) post_receives();
   const StepTasks& kinds = tasks_;
@@ -505,6 +506,7 @@ void Engine::run_graph(StepInfo* info) {
   // Not harmless: these particles keep fewer neighbours than hydro.neighbours, so their
   // density is overestimated. Counted for the run's summary too.
   h_min_held_particles_ += ctx_->h_min_held;
+  msph_decoupled_ += ctx_->msph_decoupled;
   if (ctx_->h_max_capped > 0) {
     h_max_capped_particles_ += ctx_->h_max_capped;
     warn_step(h_max_capped_steps_,

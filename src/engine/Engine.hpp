@@ -100,6 +100,8 @@ class Engine {
   // Particle-steps whose h was held at hydro.h_max short of neighbours, since the start.
   long long h_max_capped() const { return h_max_capped_particles_; }
   long long h_min_held() const { return h_min_held_particles_; }  // particle-steps at the floor of h
+  // Force interactions the MSPH rule dropped since the start (an SPH run: none).
+  long long msph_decoupled() const { return msph_decoupled_; }
 
   GasParticles& gas() { return gas_; }
   const GasParticles& gas() const { return gas_; }
@@ -274,6 +276,7 @@ class Engine {
   long long h_capped_steps_ = 0;  // steps whose h solve was capped by a cell's reach
   long long h_max_capped_steps_ = 0, h_max_capped_particles_ = 0;  // held at hydro.h_max, short of neighbours
   long long h_min_held_particles_ = 0;  // held at the floor of h (hydro.h_min_ratio), with more neighbours
+  long long msph_decoupled_ = 0;        // force interactions the MSPH rule dropped
   bool rebuild_pending_ = true;
   bool initialised_ = false;  // the first forces and timesteps are done
   std::function<void()> after_rebuild_;

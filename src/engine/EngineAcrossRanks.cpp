@@ -245,6 +245,7 @@ void Engine::finish_exchanges() {
   ctx_->h_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_capped.load())));
   ctx_->h_max_capped = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_max_capped.load())));
   ctx_->h_min_held = static_cast<int>(ranks_->sum(static_cast<long long>(ctx_->h_min_held.load())));
+  ctx_->msph_decoupled = ranks_->sum(ctx_->msph_decoupled.load());
   exchange_s_ += seconds_since(t0);
 }
 

@@ -72,6 +72,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
   const bool signal_velocity = p.courant_criterion == CourantCriterion::SignalVelocity;
   const int limiter_bins = p.limiter_bins;
   thread_local ForcePairs q;  // the pairs of one particle at a time
+  long long decoupled = 0;    // pair forces the MSPH rule dropped: one count per cell, not per pair
   for_each_active_group(ctx, a, block, true, [&](std::size_t i, NeighbourBlock& near) __attribute__((always_inline)) {
     const ForceState fi = force_state(gas, i);
     const Vec3 xi = gas.x[i];
@@ -87,7 +88,10 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
         const std::size_t j = near.index[k];
         if (j == i) continue;
         const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
-        if (msph_decoupled(si, msph_state(gas, j), dx, fi.v - gas.v[j], near.r2[k], p)) continue;
+        if (msph_decoupled(si, msph_state(gas, j), dx, fi.v - gas.v[j], near.r2[k], p)) {
+          ++decoupled;
+          continue;
+        }
         hit[kept++] = static_cast<std::uint32_t>(k);
       }
     } else {
@@ -114,6 +118,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
       gas.limit_bin[i] = static_cast<TimeBin>(std::min<int>(gas.limit_bin[i], min_bin + limiter_bins));
     }
   });
+  if (decoupled > 0) ctx.msph_decoupled.fetch_add(decoupled, std::memory_order_relaxed);
 }
 
 }  // namespace

@@ -119,8 +119,9 @@ void ghost(StepContext& ctx, int ci) {
         }
         if (!done)
           throw InputError(fmt::format("smoothing length of gas particle id {} did not converge in {} iterations "
-                                       "(h = {}, neighbour number {})",
-                                       gas.id[i], p.max_h_iterations, h, res.wcount));
+                                       "(h = {}, neighbour number {}; bracket [{}, {}] of the search radius {} "
+                                       "holding {} candidates)",
+                                       gas.id[i], p.max_h_iterations, h, res.wcount, lo, hi, reach, cand.n));
         if (h < h_floor) {
           // Held at the floor: the density is that of the floor's kernel, over more neighbours.
           if (h_floor > reach) gather_candidates(ctx, ci, i, h_floor, cand);

@@ -62,6 +62,8 @@ struct StepContext {
   std::atomic<int> h_capped{0};             // particles whose h was capped by the cover
   std::atomic<int> h_max_capped{0};         // particles held at hydro.h_max with too few neighbours
   std::atomic<int> h_min_held{0};           // particles held at the floor of h with more neighbours
+  // Force interactions (i's of j) the MSPH rule dropped: what tells an MSPH run from an SPH one.
+  std::atomic<long long> msph_decoupled{0};
 
   bool is_active(std::size_t i) const { return TimeLine::active(gas.time_bin[i], ti_current); }
   bool is_active_dm(std::size_t i) const { return TimeLine::active(dm.time_bin[i], ti_current); }
