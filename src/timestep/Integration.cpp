@@ -70,7 +70,8 @@ void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
       // A safety net, as in the closing kick: the prediction never takes u below half of
       // the smaller of its value and the cooling floor, whatever changed the particle mid-step.
       if (ctx.cooling) gas.u[i] = std::max(gas.u[i], 0.5 * std::min(u_before, ctx.cooling->floor_energy()));
-      gas.h[i] *= bounded_exp(gas.div_v[i] * dt / 3.0);
+      // The prediction keeps to the floor the ghost holds (hydro.h_min_ratio).
+      gas.h[i] = std::max(gas.h[i] * bounded_exp(gas.div_v[i] * dt / 3.0), ctx.hydro.h_min);
       gas.rho[i] *= bounded_exp(-gas.div_v[i] * dt);
     }
     gas.rho_msph[i] = gas.rho[i];
