@@ -7,6 +7,7 @@
 
 #include "hydro/HydroIact.hpp"
 #include "hydro/Kernel.hpp"
+#include "hydro/SmoothingLengthSolve.hpp"
 
 namespace fountain {
 namespace {
@@ -150,6 +151,52 @@ TEST(PairLanes, ForceMatchesOnePairForm) {
   EXPECT_NEAR(s.du_dt, one.du_dt, 1e-12 * std::fabs(one.du_dt));
   EXPECT_EQ(s.v_sig, one.v_sig);  // a maximum: the same pairs give the same value
   EXPECT_GT(one.v_sig, fi.c);
+}
+
+// A particle at the edge of a tight clump (the 69 candidates of one such particle in the
+// collapsed centre of the 8000-per-species sphere, distances in units of 1e-4 Mpc/h): N(h) is
+// S-shaped there, and plain Newton steps inside the bracket jump between its ends for ever.
+// The solver must converge to the root a bisection of N(h) finds.
+TEST(SmoothingLengthSolve, ConvergesAtTheEdgeOfATightClump) {
+  const double radii[] = {
+      0.000000e+00, 2.227056e-01, 2.776486e-01, 3.327383e-01, 3.450846e-01, 3.481833e-01,
+      4.228543e-01, 4.341974e-01, 4.376144e-01, 4.575068e-01, 4.903263e-01, 4.982782e-01,
+      5.090953e-01, 5.795566e-01, 6.431543e-01, 6.845206e-01, 6.863447e-01, 7.479277e-01,
+      7.826085e-01, 7.980140e-01, 8.788835e-01, 9.823679e-01, 1.037102e+00, 1.049616e+00,
+      1.124074e+00, 1.209347e+00, 1.229152e+00, 1.320837e+00, 1.353441e+00, 1.457068e+00,
+      1.459738e+00, 1.550399e+00, 1.686569e+00, 1.704264e+00, 1.765368e+00, 1.795886e+00,
+      1.819613e+00, 1.819788e+00, 1.853758e+00, 1.858586e+00, 1.969162e+00, 1.970320e+00,
+      2.039781e+00, 2.112822e+00, 2.135357e+00, 2.174141e+00, 2.197334e+00, 2.207468e+00,
+      2.274915e+00, 2.313345e+00, 2.337890e+00, 2.347054e+00, 2.462249e+00, 2.480100e+00,
+      2.494733e+00, 2.506696e+00, 2.537519e+00, 2.568239e+00, 2.584864e+00, 2.649168e+00,
+      2.679956e+00, 2.702347e+00, 2.739871e+00, 2.791820e+00, 2.802271e+00, 2.838488e+00,
+      2.870474e+00, 2.945171e+00, 3.116841e+00};
+  hydro::DensityPairs pairs;
+  pairs.reset(std::size(radii));
+  for (double r : radii) pairs.add({r * 1e-4, 0.0, 0.0}, {}, r * r * 1e-8, 1.0);
+  auto density_at = [&](double h) { return hydro::finish_density(hydro::sum_density_pairs(pairs, h), h); };
+  HydroParams p;  // N_ngb = 32 +- 1, 50 iterations
+  const double h0 = 2.5008362695538367e-4, reach = 3.126045336942296e-4;
+
+  // The old rule (Newton when inside the bracket, else halve it) cycles here.
+  double lo = 0.0, hi = reach, h = h0;
+  bool plain_converged = false;
+  for (int it = 0; it < p.max_h_iterations && !plain_converged; ++it) {
+    const auto d = density_at(h);
+    const double f = d.wcount - p.neighbours;
+    plain_converged = std::fabs(f) <= p.neighbours_tolerance;
+    (f < 0.0 ? lo : hi) = h;
+    const double next = d.wcount_dh > 0.0 ? h - f / d.wcount_dh : -1.0;
+    h = next > lo && next < hi ? next : 0.5 * (lo + hi);
+  }
+  EXPECT_FALSE(plain_converged);
+
+  const auto solved = hydro::solve_smoothing_length(density_at, h0, reach, p);
+  ASSERT_TRUE(solved.converged);
+  EXPECT_NEAR(solved.density.wcount, p.neighbours, p.neighbours_tolerance);
+  double a = 0.0, b = reach;
+  for (int it = 0; it < 200; ++it) (density_at(0.5 * (a + b)).wcount < p.neighbours ? a : b) = 0.5 * (a + b);
+  EXPECT_NEAR(solved.h, a, 0.02 * a);  // within the tolerance of one neighbour in 32
 }
 
 TEST(Timestep, CourantCriterion) {

@@ -8,6 +8,7 @@
 #include "hydro/HydroIact.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "hydro/NeighbourBlock.hpp"
+#include "hydro/SmoothingLengthSolve.hpp"
 
 namespace fountain::hydro {
 
@@ -102,26 +103,16 @@ void ghost(StepContext& ctx, int ci) {
           ctx.h_max_capped.fetch_add(1, std::memory_order_relaxed);  // the user's cap: reported, kept
         }
       } else {
-        double lo = 0.0, hi = reach;
-        if (!(h > 0.0 && h < reach)) h = 0.5 * reach;
-        bool done = false;
-        for (int it = 0; it < p.max_h_iterations; ++it) {
-          res = finish_density(sums_at(cand, h), h);
-          const double f = res.wcount - p.neighbours;
-          if (std::fabs(f) <= p.neighbours_tolerance) {
-            done = true;
-            break;
-          }
-          (f < 0.0 ? lo : hi) = h;
-          double next = res.wcount_dh > 0.0 ? h - f / res.wcount_dh : -1.0;
-          if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-          h = next;
-        }
-        if (!done)
+        const SmoothingLengthSolve solved =
+            solve_smoothing_length([&](double x) { return finish_density(sums_at(cand, x), x); }, h, reach, p);
+        if (!solved.converged)
           throw InputError(fmt::format("smoothing length of gas particle id {} did not converge in {} iterations "
                                        "(h = {}, neighbour number {}; bracket [{}, {}] of the search radius {} "
                                        "holding {} candidates)",
-                                       gas.id[i], p.max_h_iterations, h, res.wcount, lo, hi, reach, cand.n));
+                                       gas.id[i], p.max_h_iterations, solved.h, solved.density.wcount, solved.lo,
+                                       solved.hi, reach, cand.n));
+        h = solved.h;
+        res = solved.density;
         if (h < h_floor) {
           // Held at the floor: the density is that of the floor's kernel, over more neighbours.
           if (h_floor > reach) gather_candidates(ctx, ci, i, h_floor, cand);
