@@ -151,8 +151,11 @@ void timestep(StepContext& ctx, int c) {
       if (ctx.gravity.enabled)
         dt = std::min(dt, gravity_timestep(ctx.gravity, ctx.gravity.softening_gas, gas.a_hydro[i] + gas.a_grav[i]));
       if (dt < ctx.integration.dt_min)
-        throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {}",
-                                     gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
+        throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {} (h = {}, "
+                                     "c = {}, |v| = {}, div v = {}, v_sig = {}, |a_hydro| = {}, |a_grav| = {})",
+                                     gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current),
+                                     gas.h[i], cs, norm(gas.v[i]), gas.div_v[i], gas.v_sig[i], norm(gas.a_hydro[i]),
+                                     norm(gas.a_grav[i])));
       int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
       if (p.timestep_limiter) bin = std::min<int>(bin, gas.limit_bin[i]);
       gas.limit_bin[i] = kNoBin;
