@@ -34,5 +34,8 @@ rule tasks $physics step engine app io space particles analysis ics domain param
 rule io engine app
 # shellcheck disable=SC2086
 for layer in space particles core; do rule "src/$layer" $physics step engine app io analysis ics domain; done
+# The expanding background is a function of a alone: it sits with core, below everything.
+# shellcheck disable=SC2086
+rule src/cosmology $physics step engine app io analysis ics domain space particles
 [ "$status" -eq 0 ] && echo "PASS: every include follows the layers"
 exit "$status"

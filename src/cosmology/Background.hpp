@@ -1,0 +1,45 @@
+// The expanding background of a comoving run: E(a), cosmic time, and linear growth to second order.
+#pragma once
+
+namespace fountain::cosmology {
+
+// Matter + Lambda (+ curvature when they do not sum to one), w = -1, no radiation (as GADGET,
+// so that initial conditions and dynamics agree).
+struct CosmologyParams {
+  double omega_m = 0.3;
+  double omega_lambda = 0.7;
+  double omega_b = 0.04;
+  double hubble_param = 0.7;  // h, for conversions to physical units; H0 itself is 100 (internal)
+  double omega_k() const { return 1.0 - omega_m - omega_lambda; }
+};
+
+// Internal units are h-scaled (Mpc/h, Msun/h, km/s), so H0 = 100 per internal time unit
+// whatever h is.
+inline constexpr double kHubbleInternal = 100.0;
+
+struct SecondOrderGrowth {
+  double d2 = 0.0;  // D2, -> -(3/7) a^2 as a -> 0
+  double f2 = 0.0;  // dln D2 / dln a
+};
+
+class Background {
+ public:
+  explicit Background(const CosmologyParams& p, double hubble0 = kHubbleInternal);
+
+  const CosmologyParams& params() const { return p_; }
+  double hubble0() const { return h0_; }
+  double E(double a) const;                // H(a) / H0
+  double hubble(double a) const { return h0_ * E(a); }
+  double dln_e_dln_a(double a) const;
+  double omega_m_at(double a) const;       // Omega_m a^-3 / E^2
+  double cosmic_time(double a) const;      // t(a) = int_0^a da / (a H), internal time units
+  double growth(double a) const;           // D(a), normalised to D -> a as a -> 0
+  double growth_rate(double a) const;      // f = dln D / dln a
+  SecondOrderGrowth second_order_growth(double a) const;
+
+ private:
+  CosmologyParams p_;
+  double h0_;
+};
+
+}  // namespace fountain::cosmology
