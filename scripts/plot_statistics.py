@@ -8,12 +8,18 @@ energy, unbound gas, and the conservation of total energy and momentum.
 Times are multiplied by --time-unit-gyr (the default internal unit Mpc/(km/s) is 977.8 Gyr, h = 1).
 """
 import argparse
+import os
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from figure_stamp import save  # noqa: E402
+
 
 
 def read(path):
@@ -73,7 +79,7 @@ def main():
     if a.title:
         fig.suptitle(a.title)
     fig.tight_layout()
-    fig.savefig(a.output, dpi=110)
+    save(fig, a.output, dpi=110)
     print(f"wrote {a.output}")
 
 

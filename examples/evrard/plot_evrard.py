@@ -5,6 +5,7 @@ radius for two resolutions, and the energy budget of a run's statistics file.
     /usr/bin/python3 examples/evrard/plot_evrard.py low.hdf5 high.hdf5 low_statistics.txt -o evrard.png
 """
 import argparse
+import os
 
 import h5py
 import matplotlib
@@ -12,6 +13,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from figure_stamp import save  # noqa: E402
+
 
 GAMMA = 5.0 / 3.0
 
@@ -69,7 +75,7 @@ def main():
     for axis in ax.flat:
         axis.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(a.output, dpi=110)
+    save(fig, a.output, dpi=110)
     print(f"wrote {a.output}; max |dE/E| = {drift:.2e}")
 
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """Azimuthal velocity of a Gresho vortex snapshot against the exact (steady) profile; prints the L1 error."""
 import argparse
+import os
 
 import h5py
 import matplotlib
@@ -8,6 +9,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from figure_stamp import save  # noqa: E402
+
 
 
 def v_exact(r):
@@ -37,7 +43,7 @@ def main():
     plt.ylabel("v_phi")
     plt.title(f"Gresho vortex, {len(r)} particles, t = {t:.3g}, L1 = {l1:.4f}")
     plt.tight_layout()
-    plt.savefig(args.output, dpi=110)
+    save(plt.gcf(), args.output, dpi=110)
     print("wrote", args.output)
 
 

@@ -18,6 +18,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from figure_stamp import save  # noqa: E402
+
 
 T_STAR = 4.0e4
 RHO_STAR_CGS = 5.0e-26
@@ -97,7 +102,7 @@ def main():
     ax[0, 0].legend(fontsize=8)
     fig.suptitle("Rotating sphere with cooling: SPH (solid) vs MSPH (dashed); thicker = more particles")
     fig.tight_layout()
-    fig.savefig(os.path.join(out, "sphere_phases.png"), dpi=110)
+    save(fig, os.path.join(out, "sphere_phases.png"), dpi=110)
     plt.close(fig)
 
     # Table at the last output of each run.
@@ -144,9 +149,9 @@ def main():
         a3.grid(alpha=0.3)
     ax3[-1].set_xlabel("r (kpc/h)")
     fig2.tight_layout()
-    fig2.savefig(os.path.join(out, "sphere_faceon.png"), dpi=110)
+    save(fig2, os.path.join(out, "sphere_faceon.png"), dpi=110)
     fig3.tight_layout()
-    fig3.savefig(os.path.join(out, "sphere_density_profile.png"), dpi=110)
+    save(fig3, os.path.join(out, "sphere_density_profile.png"), dpi=110)
     print(f"figures in {out}")
 
 

@@ -19,6 +19,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from figure_stamp import save  # noqa: E402
+
 
 GYR_PER_TIME = 977.8
 
@@ -101,7 +106,7 @@ def main():
     if a.title:
         fig.suptitle(a.title)
     fig.tight_layout()
-    fig.savefig(a.output, dpi=110)
+    save(fig, a.output, dpi=110)
     print(f"wrote {a.output}")
 
     rows = [(label, summary(s, a.at)) for s, label in zip(stats, labels)]

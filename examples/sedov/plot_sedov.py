@@ -9,6 +9,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from figure_stamp import save  # noqa: E402
+
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
@@ -52,7 +57,7 @@ def main():
     plt.title(f"Sedov blast, {len(r)} particles, t = {t:.3g}")
     plt.legend()
     plt.tight_layout()
-    plt.savefig(args.output, dpi=120)
+    save(plt.gcf(), args.output, dpi=120)
     print("wrote", args.output)
 
 

@@ -9,6 +9,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import sys  # noqa: E402
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from figure_stamp import save  # noqa: E402
+
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 
@@ -37,7 +42,7 @@ def main():
         ax.set_xlim(-0.5, 0.5)
     fig.suptitle(f"Sod shock, {len(x)} particles, t = {t:.3g}, density L1 = {l1:.4f}")
     fig.tight_layout()
-    fig.savefig(args.output, dpi=110)
+    save(fig, args.output, dpi=110)
     print("wrote", args.output)
 
 
