@@ -23,6 +23,10 @@ void TaskGraph::reserve(std::size_t tasks, std::size_t dependencies) {
 
 void TaskGraph::depends(int before, int after) {
   if (before == after) return;
+  // A task the caller never added (-1 from a lookup) would corrupt the counting sort below.
+  if (before < 0 || after < 0 || before >= size() || after >= size())
+    throw std::logic_error("TaskGraph::depends(" + std::to_string(before) + ", " + std::to_string(after) +
+                           "): no such task (" + std::to_string(size()) + " tasks)");
   edges_.emplace_back(before, after);
 }
 

@@ -229,6 +229,35 @@ TEST(CellCover, GasFreeLeavesDoNotForceRebuilds) {
   EXPECT_LT(rebuilt, steps / 2) << rebuilt << " of " << steps << " steps rebuilt";
 }
 
+// Gas-only tasks (density, ghost, force, cooling, star formation, feedback search) are not
+// made for a leaf without gas; every module's links must then add no dependency on them.
+// (Star formation's once linked every leaf, and a leaf without gas gave an edge from task -1
+// that corrupted the heap as the graph was sorted.)
+TEST(CellCover, GasFreeLeavesGetNoGasTasksOrEdges) {
+  std::mt19937_64 rng(11);
+  GasParticles g;
+  test::add_random(g, 1000, {0, 0, 0}, {0.5, 0.5, 0.5}, 1.0 / 1000, 1.0, 1.0, rng);
+  CollisionlessParticles dm;
+  dm.resize(400);
+  std::uniform_real_distribution<double> U(0.6, 0.95);
+  for (std::size_t k = 0; k < dm.size(); ++k) {
+    dm.id[k] = 5000 + k;
+    dm.mass[k] = 1e-3;
+    dm.x[k] = {U(rng), U(rng), U(rng)};
+  }
+  RunConfig cfg = test::test_config(false, {1, 1, 1}, true);
+  cfg.gravity.enabled = true;
+  cfg.gravity.softening_dark_matter = 0.02;
+  cfg.gravity.softening_gas = 0.01;
+  cfg.star_formation.enabled = true;
+  Engine engine(cfg, g, dm);
+  engine.initialise();
+  bool gas_free_leaf = false;
+  for (int c : engine.space().leaves()) gas_free_leaf = gas_free_leaf || engine.space().cell(c).count == 0;
+  ASSERT_TRUE(gas_free_leaf);
+  for (int step = 0; step < 5; ++step) EXPECT_NO_THROW(engine.step()) << "step " << step;
+}
+
 // A leaf's surroundings are exactly the other leaves with gas whose boxes lie within twice
 // its cover: the rebuild check relies on every other leaf being at least that far.
 TEST(CellCover, SurroundingsAreTheLeavesWithinTwiceTheCover) {

@@ -260,7 +260,9 @@ class EngineGraphBuilder final : public GraphBuilder {
       if (kinds_[graph_.task(t).type].stage > stage) return t;
     return -1;
   }
-  void depends(int before, int after) override { graph_.depends(before, after); }
+  void depends(int before, int after) override {
+    if (before >= 0 && after >= 0) graph_.depends(before, after);
+  }
 
  private:
   tasks::TaskGraph& graph_;

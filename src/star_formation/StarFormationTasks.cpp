@@ -16,7 +16,7 @@ StarFormationTaskTypes register_tasks(StepTasks& tasks, StepContext& ctx, const 
                                         [](const tasks::Task&) {}));
   tasks.link([t](GraphBuilder& g) {
     const int done = g.step_tasks(t.done).front();
-    for (int c : g.leaves()) g.depends(g.task(t.form, c), done);
+    for (int c : g.leaves()) g.depends(g.task(t.form, c), done);  // none for a leaf without gas
   });
   return t;
 }

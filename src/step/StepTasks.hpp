@@ -113,6 +113,8 @@ class GraphBuilder {
   virtual const std::vector<int>& step_tasks(int type) const = 0;
   // Leaf c's first task of a stage after `stage`, -1 if none.
   virtual int first_after(Stage stage, int c) const = 0;
+  // `after` waits for `before`. Either being -1 (a leaf without that task: a leaf with no gas
+  // has no gas-only task) adds nothing: there is nothing to wait for or to hold back.
   virtual void depends(int before, int after) = 0;
 };
 
