@@ -16,9 +16,12 @@ struct SmoothingLengthSolve {
 
 // Solves |N(h) - N_ngb| <= tolerance for h in (0, hi], starting from h (taken as hi / 2 when
 // outside), with `density_at(h)` giving the density sums' result at h. Newton steps are taken
-// only where they stay inside the bracket and shrink faster than halving would; otherwise the
-// bracket is halved. N(h) is S-shaped for a particle at the edge of a tight clump, and plain
-// Newton then jumps between the bracket's two ends without end.
+// where they stay inside the bracket, else the bracket is halved; after kPlainNewtonSteps the
+// bracket is also halved wherever Newton shrinks it more slowly than halving would. N(h) is
+// S-shaped for a particle at the edge of a tight clump, and plain Newton then jumps between
+// the bracket's two ends without end.
+inline constexpr int kPlainNewtonSteps = 20;
+
 template <class DensityAt>
 SmoothingLengthSolve solve_smoothing_length(DensityAt&& density_at, double h, double hi, const HydroParams& p) {
   SmoothingLengthSolve s;
@@ -36,7 +39,10 @@ SmoothingLengthSolve solve_smoothing_length(DensityAt&& density_at, double h, do
     (f < 0.0 ? s.lo : s.hi) = h;
     const double slope = s.density.wcount_dh;
     const double newton = slope > 0.0 ? h - f / slope : -1.0;
-    const bool bisect = !(newton > s.lo && newton < s.hi) || std::fabs(2.0 * f) > std::fabs(step_before * slope);
+    // The guard against slow shrinking comes in only after kPlainNewtonSteps: where Newton
+    // converges, h then comes out exactly as it always did (and runs keep their results).
+    const bool slow = it >= kPlainNewtonSteps && std::fabs(2.0 * f) > std::fabs(step_before * slope);
+    const bool bisect = !(newton > s.lo && newton < s.hi) || slow;
     step_before = step;
     const double next = bisect ? 0.5 * (s.lo + s.hi) : newton;
     step = std::fabs(next - h);
