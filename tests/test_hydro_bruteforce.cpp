@@ -197,31 +197,47 @@ TEST(SmoothingLengthFloor, HeldParticlesTakeTheFloorsKernel) {
   }
 }
 
+// Gas in one corner of the unit box and dark matter alone in the opposite one, so that some
+// leaves hold no gas. Dark matter needs gravity; G = 1 with total mass 1.4 is weak beside the
+// gas's motions.
+struct GasBesideDarkMatter {
+  GasParticles gas;
+  CollisionlessParticles dm;
+  RunConfig cfg;
+};
+
+GasBesideDarkMatter gas_beside_dark_matter(bool msph) {
+  GasBesideDarkMatter set;
+  std::mt19937_64 rng(11);
+  test::add_random(set.gas, 1000, {0, 0, 0}, {0.5, 0.5, 0.5}, 1.0 / 1000, 1.0, 1.0, rng);
+  set.dm.resize(400);
+  std::uniform_real_distribution<double> U(0.6, 0.95);
+  for (std::size_t k = 0; k < set.dm.size(); ++k) {
+    set.dm.id[k] = 5000 + k;
+    set.dm.mass[k] = 1e-3;
+    set.dm.x[k] = {U(rng), U(rng), U(rng)};
+  }
+  set.cfg = test::test_config(false, {1, 1, 1}, msph);
+  set.cfg.gravity.enabled = true;
+  set.cfg.gravity.softening_dark_matter = 0.02;
+  set.cfg.gravity.softening_gas = 0.01;
+  return set;
+}
+
+bool has_gas_free_leaf(const Engine& engine) {
+  for (int c : engine.space().leaves())
+    if (engine.space().cell(c).count == 0) return true;
+  return false;
+}
+
 // A leaf holding only dark matter has no SPH neighbours to cover: it must not ask for a
 // rebuild whenever gas moves (it did, at every step, once the collapsing sphere's halo had
 // such leaves: a sixth of a long run went into recutting the cells).
 TEST(CellCover, GasFreeLeavesDoNotForceRebuilds) {
-  std::mt19937_64 rng(11);
-  GasParticles g;
-  test::add_random(g, 1000, {0, 0, 0}, {0.5, 0.5, 0.5}, 1.0 / 1000, 1.0, 1.0, rng);
-  CollisionlessParticles dm;
-  dm.resize(400);
-  std::uniform_real_distribution<double> U(0.6, 0.95);
-  for (std::size_t k = 0; k < dm.size(); ++k) {
-    dm.id[k] = 5000 + k;
-    dm.mass[k] = 1e-3;
-    dm.x[k] = {U(rng), U(rng), U(rng)};
-  }
-  // Dark matter needs gravity; G = 1 with total mass 1.4 is weak beside the gas's motions.
-  RunConfig cfg = test::test_config(false, {1, 1, 1}, false);
-  cfg.gravity.enabled = true;
-  cfg.gravity.softening_dark_matter = 0.02;
-  cfg.gravity.softening_gas = 0.01;
-  Engine engine(cfg, g, dm);
+  const GasBesideDarkMatter set = gas_beside_dark_matter(false);
+  Engine engine(set.cfg, set.gas, set.dm);
   engine.initialise();
-  bool gas_free_leaf = false;
-  for (int c : engine.space().leaves()) gas_free_leaf = gas_free_leaf || engine.space().cell(c).count == 0;
-  ASSERT_TRUE(gas_free_leaf);
+  ASSERT_TRUE(has_gas_free_leaf(engine));
   int steps = 0, rebuilt = 0;
   for (; steps < 30; ++steps) rebuilt += engine.step().rebuilt ? 1 : 0;
   // The gas moves ~0.5 per unit time against h ~ 0.1 with a skin of 0.25 h: a rebuild every
@@ -234,27 +250,11 @@ TEST(CellCover, GasFreeLeavesDoNotForceRebuilds) {
 // (Star formation's once linked every leaf, and a leaf without gas gave an edge from task -1
 // that corrupted the heap as the graph was sorted.)
 TEST(CellCover, GasFreeLeavesGetNoGasTasksOrEdges) {
-  std::mt19937_64 rng(11);
-  GasParticles g;
-  test::add_random(g, 1000, {0, 0, 0}, {0.5, 0.5, 0.5}, 1.0 / 1000, 1.0, 1.0, rng);
-  CollisionlessParticles dm;
-  dm.resize(400);
-  std::uniform_real_distribution<double> U(0.6, 0.95);
-  for (std::size_t k = 0; k < dm.size(); ++k) {
-    dm.id[k] = 5000 + k;
-    dm.mass[k] = 1e-3;
-    dm.x[k] = {U(rng), U(rng), U(rng)};
-  }
-  RunConfig cfg = test::test_config(false, {1, 1, 1}, true);
-  cfg.gravity.enabled = true;
-  cfg.gravity.softening_dark_matter = 0.02;
-  cfg.gravity.softening_gas = 0.01;
-  cfg.star_formation.enabled = true;
-  Engine engine(cfg, g, dm);
+  GasBesideDarkMatter set = gas_beside_dark_matter(true);
+  set.cfg.star_formation.enabled = true;
+  Engine engine(set.cfg, set.gas, set.dm);
   engine.initialise();
-  bool gas_free_leaf = false;
-  for (int c : engine.space().leaves()) gas_free_leaf = gas_free_leaf || engine.space().cell(c).count == 0;
-  ASSERT_TRUE(gas_free_leaf);
+  ASSERT_TRUE(has_gas_free_leaf(engine));
   for (int step = 0; step < 5; ++step) EXPECT_NO_THROW(engine.step()) << "step " << step;
 }
 

@@ -178,6 +178,21 @@ TEST(EvrardCollapse, EnergyAndMomentumConserved) {
   EXPECT_LT(p_max, 1e-3);
 }
 
+// The paper's rotating sphere in its internal units, to t_end, with gravity (gas softening
+// half the dark matter's) on 2 threads.
+RunConfig sphere_config(double t_end, double softening_dark_matter) {
+  RunConfig c;
+  c.t_end = t_end;
+  c.threads = 2;
+  c.integration.dt_min = 1e-12;
+  c.integration.dt_max = 1e-6;
+  c.gravity.enabled = true;
+  c.gravity.G = Units{}.gravitational_constant();
+  c.gravity.softening_dark_matter = softening_dark_matter;
+  c.gravity.softening_gas = 0.5 * softening_dark_matter;
+  return c;
+}
+
 // The paper's sphere with gravity and cooling over its first 30 Myr, before the collapse
 // heats anything: the gas only cools, so the thermal energy lost must be the energy the
 // cooling radiated, and the total plus the radiated energy must stay constant. (A closing
@@ -186,15 +201,7 @@ TEST(CoolingSphere, RadiatedEnergyClosesTheBudget) {
   ics::RotatingSphereParams sp;
   sp.particles_per_species = 500;
   ics::RotatingSphereIC ic = ics::rotating_sphere(sp);
-  RunConfig c;
-  c.t_end = 3.0e-5;
-  c.threads = 2;
-  c.integration.dt_min = 1e-12;
-  c.integration.dt_max = 1e-6;
-  c.gravity.enabled = true;
-  c.gravity.G = Units{}.gravitational_constant();
-  c.gravity.softening_dark_matter = 0.002;
-  c.gravity.softening_gas = 0.001;
+  RunConfig c = sphere_config(3.0e-5, 0.002);
   c.cooling.enabled = true;
   c.cooling.table_directory = std::string(FOUNTAIN_SOURCE_DIR) + "/data/cooling/sutherland_dopita_1993";
   Engine e(c, std::move(ic.gas), std::move(ic.dm));
@@ -223,16 +230,8 @@ TEST(NonRadiativeSphere, MsphIsSphUntilTheRuleDecouplesAPair) {
   sp.particles_per_species = 500;
   const ics::RotatingSphereIC ic = ics::rotating_sphere(sp);
   auto engine = [&](bool msph) {
-    RunConfig c;
-    c.t_end = 6.1e-4;  // 0.6 Gyr: the accretion shock forms at ~0.4 Gyr
-    c.threads = 2;
+    RunConfig c = sphere_config(6.1e-4, 0.004);  // 0.6 Gyr: the accretion shock forms at ~0.4 Gyr
     c.hydro.msph = msph;
-    c.integration.dt_min = 1e-12;
-    c.integration.dt_max = 1e-6;
-    c.gravity.enabled = true;
-    c.gravity.G = Units{}.gravitational_constant();
-    c.gravity.softening_dark_matter = 0.004;
-    c.gravity.softening_gas = 0.002;
     auto e = std::make_unique<Engine>(c, ic.gas, ic.dm);
     e->initialise();
     return e;
