@@ -62,4 +62,32 @@ GravityResult direct_on_target(const GravityTarget& target, std::span<const Vec3
   return out;
 }
 
+DirectSums direct_summation_periodic(std::span<const Vec3> positions, std::span<const double> masses,
+                                     std::span<const double> softenings, double G, double box,
+                                     const GravitySplit& split) {
+  check_lengths(positions, masses, softenings);
+  if (!split.enabled() || !(box > 0.0) || !(split.cutoff_radius() < 0.5 * box))
+    throw std::invalid_argument("periodic direct summation: needs a split whose cut-off is below half the box");
+  const std::size_t n = positions.size();
+  const double cut2 = split.cutoff_radius() * split.cutoff_radius();
+  DirectSums out;
+  out.acceleration.assign(n, Vec3{});
+  out.potential.assign(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = i + 1; j < n; ++j) {
+      Vec3 dx = positions[i] - positions[j];
+      for (int d = 0; d < 3; ++d) dx[d] -= box * std::nearbyint(dx[d] / box);
+      const double r2 = dot(dx, dx);
+      const double h = pair_spline_length(softenings[i], softenings[j]);
+      if (r2 > cut2 || (r2 == 0.0 && h == 0.0)) continue;
+      const PairGravity g = softened_pair(std::sqrt(r2), h, split);
+      const Vec3 f = (G * g.force) * dx;
+      out.acceleration[i] -= masses[j] * f;
+      out.acceleration[j] += masses[i] * f;
+      out.potential[i] += G * masses[j] * g.potential;
+      out.potential[j] += G * masses[i] * g.potential;
+    }
+  return out;
+}
+
 }  // namespace fountain::gravity

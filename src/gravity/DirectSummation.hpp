@@ -26,4 +26,11 @@ GravityResult direct_on_target(const GravityTarget& target, std::span<const Vec3
                                std::span<const double> masses, std::span<const double> softenings, double G,
                                const GravitySplit& split = GravitySplit{});
 
+// The periodic short-range force in a box of side `box`: every pair at its nearest image,
+// within split.cutoff_radius(), the softened pair force scaled by the split's factors. With
+// PeriodicMesh's long range it is the exact TreePM force, which the tree's approximates.
+DirectSums direct_summation_periodic(std::span<const Vec3> positions, std::span<const double> masses,
+                                     std::span<const double> softenings, double G, double box,
+                                     const GravitySplit& split);
+
 }  // namespace fountain::gravity

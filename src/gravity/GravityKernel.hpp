@@ -1,7 +1,9 @@
 // GADGET-2's cubic-spline softened gravity between two point masses, and the TreePM split hook.
 #pragma once
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <numbers>
 
 namespace fountain::gravity {
 
@@ -25,18 +27,35 @@ constexpr Real pair_inverse_spline_length(Real h_inv_i, Real h_inv_j) {
   return std::min(h_inv_i, h_inv_j);
 }
 
-// The hook for a TreePM short-range force. For now it is the identity: the tree computes the
-// whole force. TreePM will multiply the softened pair force by
-// erfc(r / 2 r_s) + (r / r_s sqrt(pi)) exp(-r^2 / 4 r_s^2) and the potential by
-// erfc(r / 2 r_s) (GADGET-2's `shortrange_table`, tabulated there in u = r / 2 r_s), and
-// the walk will skip nodes farther than cutoff_radius() (GADGET-2: RCUT = 4.5 r_s), whose
-// contribution then comes entirely from the PM mesh. Callers already pass a GravitySplit
-// and ask it for both factors, so enabling it changes this struct only.
+// GADGET-2's TreePM split of the Newtonian pair force (docs/gravity.md, "Periodic TreePM"):
+// the periodic mesh computes the long-range part, the tree (or a direct sum) the short-range
+// part, which is the Newtonian (or softened) pair force times force_factor(r) and the potential
+// times potential_factor(r), with u = r / (2 r_s):
+//   potential_factor = erfc(u),   force_factor = erfc(u) + (2 u / sqrt(pi)) exp(-u^2).
+// Both fall below 0.02 at cutoff_radius() = 4.5 r_s, beyond which the short range is dropped.
+// r_s = 0 means no split: isolated runs, where the tree computes the whole force.
 struct GravitySplit {
-  constexpr bool enabled() const { return false; }
-  constexpr double force_factor(double /*r*/) const { return 1.0; }
-  constexpr double potential_factor(double /*r*/) const { return 1.0; }
-  constexpr double cutoff_radius() const { return std::numeric_limits<double>::infinity(); }
+  double r_s = 0.0;
+  double cutoff_factor = 4.5;  // r_cut / r_s
+
+  bool enabled() const { return r_s > 0.0; }
+  double force_factor(double r) const {
+    const double u = r / (2.0 * r_s);
+    return std::erfc(u) + (2.0 / std::sqrt(std::numbers::pi)) * u * std::exp(-u * u);
+  }
+  double potential_factor(double r) const { return std::erfc(r / (2.0 * r_s)); }
+  // The factors of the second and third radial derivatives (1/r d/dr)^n of erfc(u)/r against
+  // the Newtonian ones, erfc(u) + exp(-u^2) Q_n(u) / sqrt(pi) with Q_2 = 2u + 4u^3/3 and
+  // Q_3 = Q_2 + 8u^5/15, for a node's quadrupole term (force_factor is n = 1).
+  double second_derivative_factor(double r) const {
+    const double u = r / (2.0 * r_s), u2 = u * u;
+    return std::erfc(u) + std::exp(-u2) * u * (2.0 + 4.0 / 3.0 * u2) / std::sqrt(std::numbers::pi);
+  }
+  double third_derivative_factor(double r) const {
+    const double u = r / (2.0 * r_s), u2 = u * u;
+    return std::erfc(u) + std::exp(-u2) * u * (2.0 + u2 * (4.0 / 3.0 + 8.0 / 15.0 * u2)) / std::sqrt(std::numbers::pi);
+  }
+  double cutoff_radius() const { return enabled() ? cutoff_factor * r_s : std::numeric_limits<double>::infinity(); }
 };
 
 // Per unit G m of the source: acceleration = -G m dx force, potential = G m potential,

@@ -319,7 +319,6 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConf
         pot[t] += gm_pull * f.potential;
       }
     }
-    static_assert(!GravitySplit{}.enabled(), "the float loops apply no short-range factors yet");
     for (int t = 0; t < nt; ++t) {
       g.ax[t] += static_cast<double>(ax[t]) * g.accel_unit;
       g.ay[t] += static_cast<double>(ay[t]) * g.accel_unit;
@@ -340,6 +339,8 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
                              std::span<GravityResult> results, const ForEach& for_each) const {
   if (results.size() != targets.size())
     throw std::invalid_argument("GravityTree::accelerate: targets and results differ in length");
+  if (config.split.enabled())
+    throw std::invalid_argument("GravityTree::accelerate: the tree walk has no short-range (TreePM) kernels yet");
   for (GravityResult& r : results) r = GravityResult{};
   if (nodes_.empty() || targets.empty()) return;
 
