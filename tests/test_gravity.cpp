@@ -503,13 +503,20 @@ TEST(GravityTree, CoincidentParticlesEndTheRecursion) {
   EXPECT_LT(norm(inside.acceleration), 2.0);  // only the far particle pulls: 1/0.75
 }
 
-TEST(GravityTree, RejectsPeriodicAndMismatchedInput) {
+TEST(GravityTree, RejectsBadPeriodicSetupsAndMismatchedInput) {
   const std::vector<Vec3> x{{0, 0, 0}, {1, 0, 0}};
   const std::vector<double> m{1, 1}, eps{0.1, 0.1}, short_eps{0.1};
   TreeConfig periodic;
   periodic.periodic = true;
+  EXPECT_THROW({ const GravityTree t(x, m, eps, periodic); }, std::invalid_argument);  // no box size
   periodic.box_size = 10.0;
-  EXPECT_THROW({ const GravityTree t(x, m, eps, periodic); }, std::invalid_argument);
+  const GravityTree box(x, m, eps, periodic);
+  // A periodic tree has only the short range: a walk without a split, or with a cut-off
+  // beyond half the box, would miss images.
+  EXPECT_THROW(box.accelerate({{0, 0, 0}, 0.1}, WalkConfig{}), std::invalid_argument);
+  WalkConfig too_wide;
+  too_wide.split = GravitySplit{2.0};
+  EXPECT_THROW(box.accelerate({{0, 0, 0}, 0.1}, too_wide), std::invalid_argument);
   EXPECT_THROW({ const GravityTree t(x, m, short_eps); }, std::invalid_argument);
   const GravityTree empty(std::span<const Vec3>{}, std::span<const double>{}, std::span<const double>{});
   const GravityResult r = empty.accelerate({{0, 0, 0}, 0.1}, WalkConfig{});

@@ -46,8 +46,8 @@ void check_inputs(std::span<const Vec3> positions, std::span<const double> masse
   if (positions.size() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     throw std::invalid_argument("GravityTree: too many sources for 32-bit node ranges");
   if (config.max_leaf_size < 1) throw std::invalid_argument("GravityTree: max_leaf_size must be >= 1");
-  if (config.periodic)
-    throw std::invalid_argument("GravityTree: periodic boundaries need TreePM, not implemented yet");
+  if (config.periodic && !(config.box_size > 0.0 && std::isfinite(config.box_size)))
+    throw std::invalid_argument("GravityTree: a periodic tree needs a positive box size");
   // Each source is checked as it is stored (store_source).
 }
 

@@ -1,6 +1,7 @@
 // Octree of source particles with quadrupole moments, and the gather-only walk that gives a target's acceleration.
 #pragma once
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -16,12 +17,10 @@ namespace fountain::gravity {
 struct TreeConfig {
   int max_leaf_size = 8;  // a node with more particles than this is split (unless too deep)
 
-  // Open boundaries only: constructing a tree with periodic = true throws. Periodic runs will
-  // be TreePM, as in GADGET-2: the tree then gives only the short-range force (the
-  // GravitySplit factor cuts it off at a few r_s, far below half the box), so the walk needs
-  // nothing but the nearest image of each node and particle (dx wrapped into
-  // [-box/2, box/2) before the opening test and the kernel); the long range, periodic
-  // images included, comes from the PM mesh. No Ewald correction is planned.
+  // Periodic boundaries (TreePM, as in GADGET-2): the tree gives only the short-range force,
+  // cut off at a few r_s, far below half the box, so the walk takes the nearest image of each
+  // node and particle (offsets wrapped into [-box/2, box/2)); the long range, periodic images
+  // included, comes from PeriodicMesh. Walks on a periodic tree need WalkConfig::split.
   bool periodic = false;
   double box_size = 0.0;
 };
@@ -160,6 +159,12 @@ class GravityTree {
   struct InteractionList;
   void walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const;
   void evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const;
+  // The same lists with the TreePM short-range factors (GravityWalkShortRange.cpp).
+  void evaluate_group_short_range(Group& g, const WalkConfig& config, const InteractionList& list) const;
+  // The nearest image of an offset along one axis (the offset itself for open boundaries).
+  double image(double offset) const {
+    return config_.periodic ? offset - config_.box_size * std::nearbyint(offset / config_.box_size) : offset;
+  }
 
   TreeConfig config_;
   std::vector<TreeNode> nodes_;

@@ -4,61 +4,18 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <stdexcept>
 #include <vector>
 
 #include "core/VectorClones.hpp"
 #include "gravity/GravityTree.hpp"
+#include "gravity/GravityWalkGroup.hpp"
 
 namespace fountain::gravity {
 
-// Targets per group. The walk's decisions are shared by the group and the evaluation loops
-// run over its targets (vectorised), so larger groups cost fewer decisions per target but
-// longer lists, as each node is judged from the group's box rather than from one point.
-constexpr int kGroupSize = GravityTree::kGroupSize;
-
-struct GravityTree::Group {
-  int n = 0;
-  double ax[kGroupSize], ay[kGroupSize], az[kGroupSize], pot[kGroupSize];
-  // For the float loops, padded to 8 or 16 lanes: positions relative to `centre` and spline
-  // lengths (both in units of the tree's length_unit_) and their inverses, and the targets'
-  // source indices (-1 in the padding) as two exact floats (a loop mixing int and float lanes
-  // does not vectorise).
-  float xr[kGroupSize], yr[kGroupSize], zr[kGroupSize], spline[kGroupSize], spline_inv[kGroupSize];
-  float self_hi[kGroupSize], self_lo[kGroupSize];
-  int own[kGroupSize];    // 1 if the target's own particle is on the near list (not an interaction)
-  Vec3 centre, half;      // the box around the targets' positions
-  // The float loops' unit of acceleration: a power of two near the whole tree's G M / unit^2,
-  // so that accelerations, and the quadrupole products on the way, stay far from float's
-  // subnormals and overflow whatever the unit system.
-  double accel_unit = 1.0;
-  double h_max = 0.0;     // the largest target spline length
-  double h_min = 0.0;     // the smallest
-  double a_crit = 0.0;    // alpha_force times the smallest |a_old|
-  bool relative = true;   // false if any target lacks |a_old|: Barnes-Hut for the group
-};
-
-// What one walk accepted. Nodes and particles are split by whether the Newtonian force holds
-// for the whole group (beyond every pair's spline length): `nodes` and `far` are evaluated
-// with it, `soft_nodes` and `near` with the spline (per target, without branches).
-struct GravityTree::InteractionList {
-  std::vector<std::int32_t> nodes, soft_nodes, far, near;
-  void clear() {
-    nodes.clear();
-    soft_nodes.clear();
-    far.clear();
-    near.clear();
-  }
-};
-
 namespace {
-// A 32-bit index as two floats, each exact (12 and 20 bits): equal keys, equal indices.
-struct IndexKey {
-  float hi, lo;
-};
-inline IndexKey index_key(std::int32_t i) { return {static_cast<float>(i >> 12), static_cast<float>(i & 4095)}; }
-
 // The gap between the group's box and a point or a cube, per axis.
 inline double gap(double offset, double reach) { return std::max(std::fabs(offset) - reach, 0.0); }
 
@@ -101,7 +58,8 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   while (n >= 0) {
     const TreeNode& node = nodes_[n];
     const double half = 0.5 * node.side;
-    const double ox = node.centre.x - g.centre.x, oy = node.centre.y - g.centre.y, oz = node.centre.z - g.centre.z;
+    const double ox = image(node.centre.x - g.centre.x), oy = image(node.centre.y - g.centre.y),
+                 oz = image(node.centre.z - g.centre.z);
     const double gx = gap(ox, half + g.half.x), gy = gap(oy, half + g.half.y), gz = gap(oz, half + g.half.z);
     const double d2box = gx * gx + gy * gy + gz * gz;
     // GADGET-2's safety check: a target within the cube grown by 10% per side opens it.
@@ -123,8 +81,8 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     const bool beyond = d2box >= h * h;
     bool accept = false;
     if (!inside_enlarged && (beyond || soft_allowed)) {
-      const double cx = gap(node.com.x - g.centre.x, g.half.x), cy = gap(node.com.y - g.centre.y, g.half.y),
-                   cz = gap(node.com.z - g.centre.z, g.half.z);
+      const double cx = gap(image(node.com.x - g.centre.x), g.half.x), cy = gap(image(node.com.y - g.centre.y), g.half.y),
+                   cz = gap(image(node.com.z - g.centre.z), g.half.z);
       const double r2 = cx * cx + cy * cy + cz * cz;
       const double l2 = node.side * node.side;
       if (!g.relative) {
@@ -152,8 +110,8 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
       n = node.next;
     } else {
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        const double px = gap(pos_[k].x - g.centre.x, g.half.x), py = gap(pos_[k].y - g.centre.y, g.half.y),
-                     pz = gap(pos_[k].z - g.centre.z, g.half.z);
+        const double px = gap(image(pos_[k].x - g.centre.x), g.half.x), py = gap(image(pos_[k].y - g.centre.y), g.half.y),
+                     pz = gap(image(pos_[k].z - g.centre.z), g.half.z);
         const double hp = std::max(g.h_max, spline_[k]);
         const double d2 = px * px + py * py + pz * pz;
         // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
@@ -339,8 +297,10 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
                              std::span<GravityResult> results, const ForEach& for_each) const {
   if (results.size() != targets.size())
     throw std::invalid_argument("GravityTree::accelerate: targets and results differ in length");
-  if (config.split.enabled())
-    throw std::invalid_argument("GravityTree::accelerate: the tree walk has no short-range (TreePM) kernels yet");
+  if (config_.periodic && !(config.split.enabled() && config.split.cutoff_radius() < 0.5 * config_.box_size))
+    throw std::invalid_argument(
+        "GravityTree::accelerate: a periodic tree gives the short-range force only: the walk needs a TreePM split "
+        "whose cut-off is below half the box");
   for (GravityResult& r : results) r = GravityResult{};
   if (nodes_.empty() || targets.empty()) return;
 
@@ -366,14 +326,15 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
   const double unit_inv = 1.0 / length_unit_;
   const double field = config.G * root.mass * unit_inv * unit_inv;
   const double accel_unit = field > 0.0 && std::isfinite(field) ? std::ldexp(1.0, std::ilogb(field)) : 1.0;
+  const std::unique_ptr<const ShortRangeTable> short_range =
+      config.split.enabled() ? std::make_unique<const ShortRangeTable>(config.split, length_unit_) : nullptr;
   // Each group is walked and evaluated alone, so groups may go in parallel: a target's answer
   // depends only on its group.
-  auto walk_and_evaluate = [&](std::size_t group) {
+  auto walk_and_evaluate_targets = [&](std::size_t begin, std::size_t count) {
     thread_local InteractionList list;
     Group g;
     g.accel_unit = accel_unit;
-    const std::size_t begin = group * kGroupSize;
-    g.n = static_cast<int>(std::min<std::size_t>(kGroupSize, order.size() - begin));
+    g.n = static_cast<int>(count);
     Vec3 lo = targets[order[begin]].position, hi = lo;
     g.h_max = 0.0;
     g.h_min = std::numeric_limits<double>::infinity();
@@ -420,8 +381,12 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
     if (g.n > 1)
       for (int d = 0; d < 3; ++d) g.half[d] += 1e-12 * (std::fabs(g.centre[d]) + g.half[d]);
     g.a_crit = config.alpha_force * a_min;
+    g.short_range = short_range.get();
     walk_group(g, config, list);
-    evaluate_group(g, config, list);
+    if (g.short_range)
+      evaluate_group_short_range(g, config, list);
+    else
+      evaluate_group(g, config, list);
 
     for (int t = 0; t < g.n; ++t) {
       GravityResult& r = results[order[begin + static_cast<std::size_t>(t)]];
@@ -430,6 +395,28 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       r.node_interactions = static_cast<std::int64_t>(list.nodes.size() + list.soft_nodes.size());
       r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - g.own[t];
     }
+  };
+  // Periodic: a group's nearest images are taken from its centre, which is every target's
+  // own nearest image of any source within the cut-off only while the group's half-width is
+  // at most (L/2 - r_cut)/2; the rare wider group (a sparse set) is walked target by target.
+  const double widest_half =
+      config_.periodic ? 0.5 * (0.5 * config_.box_size - config.split.cutoff_radius()) : 0.0;
+  auto walk_and_evaluate = [&](std::size_t group) {
+    const std::size_t begin = group * kGroupSize;
+    const std::size_t count = std::min<std::size_t>(kGroupSize, order.size() - begin);
+    if (config_.periodic && count > 1) {
+      Vec3 lo = targets[order[begin]].position, hi = lo;
+      for (std::size_t t = 1; t < count; ++t)
+        for (int d = 0; d < 3; ++d) {
+          lo[d] = std::min(lo[d], targets[order[begin + t]].position[d]);
+          hi[d] = std::max(hi[d], targets[order[begin + t]].position[d]);
+        }
+      if (std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) > 2.0 * widest_half) {
+        for (std::size_t t = 0; t < count; ++t) walk_and_evaluate_targets(begin + t, 1);
+        return;
+      }
+    }
+    walk_and_evaluate_targets(begin, count);
   };
   for_each_or_serial(for_each, (order.size() + kGroupSize - 1) / kGroupSize, walk_and_evaluate);
 }

@@ -1,0 +1,139 @@
+// The walk's lists evaluated with the TreePM short-range factors: the tree's half of periodic gravity (docs/gravity.md, "Periodic TreePM").
+#include <algorithm>
+#include <cmath>
+
+#include "core/VectorClones.hpp"
+#include "gravity/GravityTree.hpp"
+#include "gravity/GravityWalkGroup.hpp"
+
+namespace fountain::gravity {
+
+namespace {
+
+// Linear interpolation of a table at t = u * bins_per_u, clamped to the table.
+inline float lookup(const float* table, float t) {
+  const float c = std::min(t, float(ShortRangeTable::kBins) - 0.5f);
+  const int i = static_cast<int>(c);
+  const float f = c - static_cast<float>(i);
+  return table[i] + f * (table[i + 1] - table[i]);
+}
+
+}  // namespace
+
+// As evaluate_group, in the same float units, with each pair's Newtonian (or softened)
+// derivatives scaled by the split: the potential by g0, the force by g1, and in a node's
+// quadrupole term the second and third derivatives by g2 and g3. The truncated potential is
+// not harmonic, so a node's expansion keeps the trace of its second moment as well (the same
+// Taylor terms as softened_node_field; with g_n = 1 they vanish). Pairs beyond the cut-off
+// add nothing. Offsets are nearest images.
+FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, const WalkConfig& config,
+                                                                     const InteractionList& list) const {
+  const ShortRangeTable& table = *g.short_range;
+  const int nt = g.n;
+  const int lanes = nt <= 8 ? 8 : kGroupSize;
+  const double unit_inv = 1.0 / length_unit_;
+  const double gm_scale = unit_inv * unit_inv / g.accel_unit;
+  const double q_scale = gm_scale * unit_inv * unit_inv;
+  const double pot_unit = length_unit_ * g.accel_unit;
+  const double G = config.G;
+  const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
+  const float t_per_length = table.u_per_length * table.bins_per_u;
+  const float r_cut = table.u_cut / table.u_per_length;
+  const float* g0 = table.g0.data();
+  const float* g1 = table.g1.data();
+  const float* g2 = table.g2.data();
+  const float* g3 = table.g3.data();
+  auto offset = [&](const Vec3& x) {
+    return std::array<float, 3>{static_cast<float>(image(x.x - g.centre.x) * unit_inv),
+                                static_cast<float>(image(x.y - g.centre.y) * unit_inv),
+                                static_cast<float>(image(x.z - g.centre.z) * unit_inv)};
+  };
+  float ax[kGroupSize] = {}, ay[kGroupSize] = {}, az[kGroupSize] = {}, pot[kGroupSize] = {};
+
+  for (const std::int32_t k : list.nodes) {
+    const TreeNode& node = nodes_[k];
+    const auto [cx, cy, cz] = offset(node.com);
+    const float gm = static_cast<float>(G * node.mass * gm_scale);
+    float q[6];
+    for (int i = 0; i < 6; ++i) q[i] = quadrupole ? static_cast<float>(G * node.quadrupole[i] * q_scale) : 0.0f;
+    const float trace = quadrupole ? static_cast<float>(G * node.second_moment * q_scale) : 0.0f;
+    for (int t = 0; t < lanes; ++t) {
+      const float dx = g.xr[t] - cx, dy = g.yr[t] - cy, dz = g.zr[t] - cz;
+      const float r2 = dx * dx + dy * dy + dz * dz;
+      const float r = std::sqrt(r2);
+      const float inside = r < r_cut ? 1.0f : 0.0f;
+      const float tu = r * t_per_length;
+      const float f0 = inside * lookup(g0, tu), f1 = inside * lookup(g1, tu), f2 = inside * lookup(g2, tu),
+                  f3 = inside * lookup(g3, tu);
+      const float r_inv = 1.0f / r;
+      const float r2_inv = r_inv * r_inv;
+      const float r3_inv = r_inv * r2_inv;
+      const float r5_inv = r3_inv * r2_inv;
+      // The truncated potential's radial derivatives (1/r d/dr)^n, n = 1..3.
+      const float d1 = f1 * r3_inv, d2 = -3.0f * f2 * r5_inv, d3 = 15.0f * f3 * r5_inv * r2_inv;
+      const float qx = q[0] * dx + q[3] * dy + q[4] * dz, qy = q[3] * dx + q[1] * dy + q[5] * dz,
+                  qz = q[4] * dx + q[5] * dy + q[2] * dz;
+      const float dqd = dx * qx + dy * qy + dz * qz;
+      const float along = gm * d1 + trace * (d3 * r2 * (1.0f / 6.0f) + d2 * (5.0f / 6.0f)) + d3 * dqd * (1.0f / 6.0f);
+      const float across = d2 * (1.0f / 3.0f);
+      ax[t] -= along * dx + across * qx;
+      ay[t] -= along * dy + across * qy;
+      az[t] -= along * dz + across * qz;
+      pot[t] += -gm * f0 * r_inv + d2 * dqd * (1.0f / 6.0f) + trace * (d2 * r2 * (1.0f / 6.0f) + 0.5f * d1);
+    }
+  }
+  for (const std::int32_t k : list.far) {
+    const auto [px, py, pz] = offset(pos_[k]);
+    const float gm = static_cast<float>(G * mass_[k] * gm_scale);
+    for (int t = 0; t < lanes; ++t) {
+      const float dx = g.xr[t] - px, dy = g.yr[t] - py, dz = g.zr[t] - pz;
+      const float r2 = dx * dx + dy * dy + dz * dz;
+      const float r = std::sqrt(r2);
+      const float inside = r < r_cut ? gm : 0.0f;
+      const float tu = r * t_per_length;
+      const float r_inv = 1.0f / r;
+      const float s = inside * lookup(g1, tu) * (r_inv * r_inv * r_inv);
+      ax[t] -= s * dx;
+      ay[t] -= s * dy;
+      az[t] -= s * dz;
+      pot[t] -= inside * lookup(g0, tu) * r_inv;
+    }
+  }
+  // Near particles: the spline-softened pair (softening is far below r_s) times the factors;
+  // a target's own particle and unsoftened coincident ones add exact zeros, as in
+  // evaluate_group.
+  float owned[kGroupSize] = {};
+  for (const std::int32_t k : list.near) {
+    const auto [px, py, pz] = offset(pos_[k]);
+    const float gm = static_cast<float>(G * mass_[k] * gm_scale);
+    const float h_k = spline_f_[k], h_inv_k = spline_inv_f_[k];
+    const IndexKey source = index_key(index_[k]);
+    for (int t = 0; t < lanes; ++t) {
+      const float key_diff = std::fabs(source.hi - g.self_hi[t]) + std::fabs(source.lo - g.self_lo[t]);
+      owned[t] += key_diff != 0.0f ? 0.0f : 1.0f;
+      const float dx = g.xr[t] - px, dy = g.yr[t] - py, dz = g.zr[t] - pz;
+      const float r2 = dx * dx + dy * dy + dz * dz;
+      const float h = std::max(g.spline[t], h_k);
+      const float gm_other = key_diff != 0.0f ? gm : 0.0f;
+      const float gm_pull = r2 + h != 0.0f ? gm_other : 0.0f;
+      const float r = gm_pull != 0.0f ? std::sqrt(r2) : 1.0f;
+      const float gm_in = r < r_cut ? gm_pull : 0.0f;
+      const float tu = r * t_per_length;
+      const auto f = softened_pair_branch_free(r, h, pair_inverse_spline_length(g.spline_inv[t], h_inv_k));
+      const float s = gm_in * lookup(g1, tu) * f.force;
+      ax[t] -= s * dx;
+      ay[t] -= s * dy;
+      az[t] -= s * dz;
+      pot[t] += gm_in * lookup(g0, tu) * f.potential;
+    }
+  }
+  for (int t = 0; t < nt; ++t) {
+    g.ax[t] = static_cast<double>(ax[t]) * g.accel_unit;
+    g.ay[t] = static_cast<double>(ay[t]) * g.accel_unit;
+    g.az[t] = static_cast<double>(az[t]) * g.accel_unit;
+    g.pot[t] = static_cast<double>(pot[t]) * pot_unit;
+    g.own[t] = owned[t] > 0.0f ? 1 : 0;
+  }
+}
+
+}  // namespace fountain::gravity
