@@ -27,8 +27,9 @@ struct NodeField {
 //   phi = -G (M / r + d.Q.d / (2 r^5))
 //   a   = -grad phi = G (-M d / r^3 + Q d / r^5 - (5/2) (d.Q.d) d / r^7).
 // With a GravitySplit enabled only the monopole is scaled by the short-range factors
-// (GADGET-2's monopole-only form); TreePM with quadrupoles needs the split's derivatives in
-// the quadrupole term as well (GADGET-4 has them), to be added with the split itself.
+// (GADGET-2's monopole-only form); the tree walk's TreePM evaluation
+// (GravityWalkShortRange.cpp) scales the quadrupole term's derivatives as well and keeps the
+// trace term the truncated potential needs.
 inline NodeField node_field(const Vec3& d, double mass, const Quadrupole& q, double G, MultipoleOrder order,
                             const GravitySplit& split = GravitySplit{}) {
   const double r2 = dot(d, d);
