@@ -1,4 +1,4 @@
-// Google Benchmark microbenchmarks of the pure SPH pair interactions and of the gravity walk.
+// Google Benchmark microbenchmarks of the pure SPH pair interactions, the gravity walk and the periodic mesh.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "gravity/GravityTree.hpp"
+#include "gravity/PeriodicMesh.hpp"
 #include "hydro/HydroIact.hpp"
 #include "ics/Lattice.hpp"
 #include "space/Space.hpp"
@@ -202,6 +203,68 @@ void BM_SpaceFindNeighbours(benchmark::State& state) {
   state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(space.leaves().size()));
 }
 BENCHMARK(BM_SpaceFindNeighbours)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+
+// Periodic TreePM's two halves over 64^3 = 262,144 particles placed at random in a unit box
+// (a cosmological box's early state), on `threads` executor threads. BM_PeriodicMesh: one
+// long-range force computation on a mesh of the first argument's cells per side (assignment,
+// two FFTs, gradient and interpolation). BM_PeriodicTreeShortRange: the tree's short range
+// (build excluded) at r_s = 1.25 cells of a 128^3 mesh, relative criterion alpha_force 0.01
+// with |a_old| from a first walk. Items are particles.
+struct PeriodicBox {
+  tasks::Executor executor;
+  ForEach for_each;
+  std::vector<Vec3> x;
+  std::vector<double> m, eps;
+  explicit PeriodicBox(int threads) : executor(threads) {
+    for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor.for_each(n, fn); };
+    std::mt19937_64 rng(17);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    const std::size_t n = 64 * 64 * 64;
+    x.resize(n);
+    for (Vec3& p : x) p = {U(rng), U(rng), U(rng)};
+    m.assign(n, 1.0 / static_cast<double>(n));
+    eps.assign(n, 1.0 / 64 / 30);
+  }
+};
+
+void BM_PeriodicMesh(benchmark::State& state) {
+  const int cells = static_cast<int>(state.range(0));
+  PeriodicBox box(static_cast<int>(state.range(1)));
+  gravity::PeriodicMesh mesh(cells, 1.0, gravity::PeriodicMesh::default_split_scale(cells, 1.0), 1.0);
+  std::vector<Vec3> acc(box.x.size());
+  std::vector<double> pot(box.x.size());
+  for (auto _ : state) {
+    mesh.compute(box.x, box.m, acc, pot, box.for_each);
+    benchmark::DoNotOptimize(acc.data());
+  }
+  state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(box.x.size()));
+}
+BENCHMARK(BM_PeriodicMesh)->ArgNames({"cells", "threads"})->Args({64, 1})->Args({128, 1})->Args({128, 2})->Unit(benchmark::kMillisecond);
+
+void BM_PeriodicTreeShortRange(benchmark::State& state) {
+  PeriodicBox box(static_cast<int>(state.range(0)));
+  gravity::TreeConfig tree_config;
+  tree_config.periodic = true;
+  tree_config.box_size = 1.0;
+  const gravity::GravityTree tree(box.x, box.m, box.eps, tree_config);
+  gravity::WalkConfig config;
+  config.split = gravity::GravitySplit{gravity::PeriodicMesh::default_split_scale(128, 1.0)};
+  std::vector<gravity::GravityTarget> targets(box.x.size());
+  for (std::size_t i = 0; i < targets.size(); ++i)
+    targets[i] = {box.x[i], box.eps[i], gravity::kNoOldAcceleration, static_cast<std::int64_t>(i)};
+  std::vector<gravity::GravityResult> results(targets.size());
+  tree.accelerate(targets, config, results, box.for_each);
+  for (std::size_t i = 0; i < targets.size(); ++i) targets[i].a_old = norm(results[i].acceleration);
+  for (auto _ : state) {
+    tree.accelerate(targets, config, results, box.for_each);
+    benchmark::DoNotOptimize(results.data());
+  }
+  double interactions = 0.0;
+  for (const auto& r : results) interactions += static_cast<double>(r.interactions());
+  state.counters["interactions_per_target"] = interactions / static_cast<double>(results.size());
+  state.SetItemsProcessed(static_cast<long>(state.iterations()) * static_cast<long>(box.x.size()));
+}
+BENCHMARK(BM_PeriodicTreeShortRange)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
