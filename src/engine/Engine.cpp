@@ -16,6 +16,7 @@
 #include "engine/CellMessages.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "gravity/GravityTasks.hpp"
+#include "gravity/LongRangeForce.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "hydro/HydroTasks.hpp"
 #include "star_formation/StarFormationLoop.hpp"
@@ -73,8 +74,26 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
                                  !config_.gravity.enabled && !config_.star_formation.enabled,
                                  config_.repartition_imbalance, config_.repartition_min_steps);
   if (config_.star_formation.enabled) setup_star_formation();
+  if (config_.gravity.enabled && config_.space.periodic) setup_periodic_gravity();
   register_tasks();
   guess_smoothing_lengths();
+}
+
+// TreePM in a periodic box (docs/gravity.md, "Periodic TreePM"): the mesh is a cube over the
+// box, so the box must be one.
+void Engine::setup_periodic_gravity() {
+  const Vec3 box = config_.space.box_size;
+  if (!(box.x == box.y && box.y == box.z))
+    throw InputError(fmt::format("gravity in a periodic box needs a cubic box (the TreePM mesh is a cube); "
+                                 "/Header/BoxSize is ({}, {}, {})",
+                                 box.x, box.y, box.z));
+  const int cells = gravity::LongRangeForce::choose_cells(config_.gravity.mesh_cells, gas_.size() + dm_.size());
+  const double r_s = config_.gravity.split_cells * box.x / cells;
+  if (!(gravity::GravitySplit{r_s}.cutoff_radius() < 0.5 * box.x))
+    throw InputError(fmt::format("gravity.split_cells = {} with {} mesh cells puts the short-range cut-off (4.5 r_s = "
+                                 "{}) beyond half the box ({}): use more cells or a smaller split",
+                                 config_.gravity.split_cells, cells, 4.5 * r_s, 0.5 * box.x));
+  ctx_->long_range = std::make_unique<gravity::LongRangeForce>(cells, box.x, r_s, config_.gravity.G);
 }
 
 void Engine::register_tasks() {

@@ -1,9 +1,11 @@
 #include "gravity/GravityLoop.hpp"
 
+#include <cmath>
 #include <vector>
 
 #include "gravity/GravityParams.hpp"
 #include "gravity/GravityTree.hpp"
+#include "gravity/LongRangeForce.hpp"
 
 namespace fountain::gravity {
 
@@ -26,7 +28,40 @@ void build_tree(StepContext& ctx) {
     m.push_back(dm.mass[i]);
     eps.push_back(ctx.gravity.softening(dm.species[i]));
   }
-  ctx.tree = std::make_unique<GravityTree>(x, m, eps);
+  TreeConfig config;
+  if (ctx.long_range) {
+    config.periodic = true;
+    config.box_size = ctx.long_range->mesh.box();
+  }
+  ctx.tree = std::make_unique<GravityTree>(x, m, eps, config);
+}
+
+int LongRangeForce::choose_cells(int cells, std::size_t particles) {
+  if (cells > 0) return cells;
+  const double per_side = std::cbrt(static_cast<double>(particles));
+  int n = 16;
+  while (n < per_side - 1e-9 && n < 4096) n *= 2;
+  return n;
+}
+
+void compute_long_range(StepContext& ctx) {
+  LongRangeForce& lr = *ctx.long_range;
+  const GasParticles& gas = ctx.gas;
+  const CollisionlessParticles& dm = ctx.dm;
+  const std::size_t n = gas.size() + dm.size();
+  std::vector<Vec3> x(n);
+  std::vector<double> m(n);
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    x[i] = gas.x[i];
+    m[i] = gas.dynamical_mass(i);
+  }
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    x[gas.size() + i] = dm.x[i];
+    m[gas.size() + i] = dm.mass[i];
+  }
+  lr.acceleration.resize(n);
+  lr.potential.resize(n);
+  lr.mesh.compute(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
 }
 
 void plan_tree_update(StepContext& ctx) {
@@ -69,7 +104,9 @@ void walk_cell(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
   CollisionlessParticles& dm = ctx.dm;
   const Cell& cell = ctx.space.cell(c);
-  const WalkConfig config = ctx.gravity.walk();
+  WalkConfig config = ctx.gravity.walk();
+  const LongRangeForce* long_range = ctx.long_range.get();
+  if (long_range) config.split = long_range->mesh.split();
   // The cell's active particles of both species are walked together, in groups.
   std::vector<GravityTarget> targets;
   std::vector<std::size_t> gas_targets, dm_targets;
@@ -89,6 +126,12 @@ void walk_cell(StepContext& ctx, int c) {
   // More than two groups: idle threads may take some.
   const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::kGroupSize);
   ctx.tree->accelerate(targets, config, results, split ? ctx.in_task_for_each : ForEach{});
+  if (long_range)
+    for (std::size_t k = 0; k < targets.size(); ++k) {
+      const auto source = static_cast<std::size_t>(targets[k].source_index);
+      results[k].acceleration += long_range->acceleration[source];
+      results[k].potential += long_range->potential[source];
+    }
   std::size_t k = 0;
   for (const std::size_t i : gas_targets) {
     gas.a_grav[i] = results[k].acceleration;

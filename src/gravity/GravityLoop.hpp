@@ -20,6 +20,10 @@ void plan_tree_update(StepContext& ctx);
 void refit_tree_group(StepContext& ctx, int g);
 void finish_tree(StepContext& ctx);
 
+// Periodic boxes: the long-range accelerations and potentials of every particle at its
+// drifted position (ctx.long_range), which the walks add to the tree's short range.
+void compute_long_range(StepContext& ctx);
+
 // Accelerations and potentials of the active particles of leaf `c` from the tree (gather
 // only: writes nothing but c's particles). A particle with no previous acceleration gets the
 // Barnes-Hut criterion, the others the relative one.

@@ -22,6 +22,12 @@ GravityParams GravityParams::from(const ParameterFile& p, const Units& units) {
                                  p.origin()));
   g.alpha_force = p.real("gravity.alpha_force");
   g.eta = p.real("gravity.eta");
+  g.mesh_cells = static_cast<int>(p.integer("gravity.mesh_cells"));
+  if (g.mesh_cells != 0 && (g.mesh_cells < 16 || g.mesh_cells % 2 != 0))
+    throw InputError(fmt::format("{}: 'gravity.mesh_cells' = {}: the mesh needs an even number of cells, at least 16 "
+                                 "(or 0 to choose it from the particle count)",
+                                 p.origin(), g.mesh_cells));
+  g.split_cells = p.real("gravity.split_cells");
   g.criterion = p.text("gravity.opening_criterion") == "quadrupole" ? gravity::OpeningCriterion::relative_quadrupole
                                                                     : gravity::OpeningCriterion::gadget2_monopole;
   return g;

@@ -19,6 +19,10 @@ struct GravityParams {
   double theta = 0.5;                  // Barnes-Hut angle of the first force computation
   gravity::OpeningCriterion criterion = gravity::OpeningCriterion::gadget2_monopole;
   double eta = 0.08;                   // dt_grav = sqrt(2 eta eps / |a|)
+  // Periodic boxes (TreePM): mesh cells per side (0: chosen from the particle count) and the
+  // split scale r_s in mesh cells.
+  int mesh_cells = 0;
+  double split_cells = 1.25;
 
   double softening_stars() const { return 0.5 * (softening_gas + softening_dark_matter); }
   double softening(Species s) const { return s == Species::Star ? softening_stars() : softening_dark_matter; }

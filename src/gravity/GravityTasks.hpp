@@ -1,4 +1,4 @@
-// Gravity's tasks: one tree per step, refitted in parts and finished above them, and each leaf's walk of it.
+// Gravity's tasks: one tree per step, refitted in parts and finished above them, each leaf's walk of it, and in periodic boxes the long-range mesh.
 #pragma once
 #include "step/StepContext.hpp"
 #include "step/StepTasks.hpp"
@@ -6,7 +6,7 @@
 namespace fountain::gravity {
 
 struct GravityTaskTypes {
-  int refit = -1, tree = -1, walk = -1;
+  int refit = -1, tree = -1, walk = -1, mesh = -1;  // mesh: periodic boxes only
 };
 
 // drift: the integration's type; the tree is made from every leaf's drifted particles.

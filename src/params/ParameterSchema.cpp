@@ -84,7 +84,12 @@ const std::vector<ParamSpec>& parameter_schema() {
            "MinGasHsmlFractional); a particle that would need less keeps this h and more neighbours. 0: no floor."),
       integer("hydro.max_h_iterations", "50", 1, 1000, "Iterations of the smoothing-length solver before the run stops with an error."),
       // gravity
-      boolean("gravity.enabled", "false", "Self-gravity of all particles (tree, open boundaries)."),
+      boolean("gravity.enabled", "false",
+              "Self-gravity of all particles: a tree with open boundaries, or in a periodic box (initial_conditions.periodic) TreePM, a mesh for the long range and the tree for the short range."),
+      integer("gravity.mesh_cells", "0", 0, 4096,
+              "Periodic boxes: cells per side of the long-range mesh (even, at least 16); 0 takes the smallest power of two at least the particles per side (GADGET's PMGRID choice)."),
+      real("gravity.split_cells", "1.25", 0.5, 8,
+           "Periodic boxes: the TreePM split scale r_s in mesh cells (GADGET's ASMTH); the tree's short range is cut off at 4.5 r_s."),
       real("gravity.G", "0", 0, inf, "Newton's constant in internal units; 0 derives it from the unit system."),
       real("gravity.softening_dark_matter", "0", 0, inf,
            "Plummer-equivalent softening of dark matter (the spline reaches 2.8 times it); stars take the mean of gas and dark matter."),

@@ -20,6 +20,7 @@ class RadiativeCooling;
 }
 namespace gravity {
 class GravityTree;
+struct LongRangeForce;
 }
 
 struct IntegrationParams {
@@ -49,6 +50,9 @@ struct StepContext {
   // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
   enum class TreeUpdate { keep, refit, build };
   TreeUpdate tree_update = TreeUpdate::build;
+
+  // Periodic boxes: the long-range mesh and its forces (TreePM); null for open boundaries.
+  std::unique_ptr<gravity::LongRangeForce> long_range{};
 
   IntegerTime ti_current = 0;
 

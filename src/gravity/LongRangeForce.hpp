@@ -1,0 +1,26 @@
+// A periodic run's long-range gravity: the mesh and the accelerations and potentials it gave this step's particles.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "core/Vec3.hpp"
+#include "gravity/PeriodicMesh.hpp"
+
+namespace fountain::gravity {
+
+// Per tree source (gas first, then collisionless particles, as build_tree numbers them), at
+// the positions of the step's last mesh computation.
+struct LongRangeForce {
+  PeriodicMesh mesh;
+  std::vector<Vec3> acceleration;
+  std::vector<double> potential;
+
+  LongRangeForce(int cells, double box, double r_s, double G) : mesh(cells, box, r_s, G) {}
+
+  // The mesh a run of `particles` in a box of side `box` uses: `cells` when set, otherwise
+  // the smallest power of two at least the particles per side (and at least 16, so that the
+  // short-range cut-off stays below half the box).
+  static int choose_cells(int cells, std::size_t particles);
+};
+
+}  // namespace fountain::gravity
