@@ -43,9 +43,11 @@ double IntegrationFactors::slope(Kind k, double a) const {
   return 0.0;
 }
 
-double IntegrationFactors::cumulative(Kind k, double a) const {
+double IntegrationFactors::cumulative(Kind k, double a) const { return cumulative_at_ln(k, std::log(a)); }
+
+double IntegrationFactors::cumulative_at_ln(Kind k, double ln_a) const {
   const auto& t = table_[static_cast<std::size_t>(k)];
-  const double x = (std::log(a) - ln_begin_) / step_;
+  const double x = (ln_a - ln_begin_) / step_;
   const int last = static_cast<int>(t.size()) - 2;
   const int i = std::clamp(static_cast<int>(std::floor(x)), 0, last);
   const double s = x - i;

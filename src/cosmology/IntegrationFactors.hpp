@@ -26,6 +26,12 @@ class IntegrationFactors {
   double factor(Kind k, double a1, double a2) const { return cumulative(k, a2) - cumulative(k, a1); }
   // F_k(ln a) - F_k(ln a_begin).
   double cumulative(Kind k, double a) const;
+  // The same at ln a (what the integer timeline holds).
+  double cumulative_at_ln(Kind k, double ln_a) const;
+  double factor_between_ln(Kind k, double ln_a1, double ln_a2) const {
+    return cumulative_at_ln(k, ln_a2) - cumulative_at_ln(k, ln_a1);
+  }
+  const Background& background() const { return background_; }
   // The scale factor a cosmic time t after a_begin (Newton on the time table).
   double scale_factor_after(double t) const;
   double a_begin() const { return a_begin_; }

@@ -1,7 +1,10 @@
 // The integer timeline of individual power-of-two timesteps, and time bins.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+
+#include "cosmology/IntegrationFactors.hpp"
 
 namespace fountain {
 
@@ -48,6 +51,50 @@ struct TimeLine {
   // the integrals of da/(a^2 H) and da/(a H) over the interval.
   double drift_factor(IntegerTime ti0, IntegerTime ti1) const { return static_cast<double>(ti1 - ti0) * time_base(); }
   double kick_factor(IntegerTime ti0, IntegerTime ti1) const { return static_cast<double>(ti1 - ti0) * time_base(); }
+};
+
+// The integer timeline of a comoving run (docs/physics.md §9): the 2^56 ticks span ln a from
+// ln a_begin to ln a_end, so steps in a bin are equal steps of ln a, and each factor of the
+// comoving leapfrog over a tick interval is a difference of the expansion's tabulated
+// integrals: consecutive intervals telescope. Ticks may be fractional (a step's midpoint,
+// where its half kicks meet, for bin 0).
+class ComovingTimeLine {
+ public:
+  explicit ComovingTimeLine(const cosmology::IntegrationFactors& factors)
+      : factors_(&factors),
+        ln_begin_(std::log(factors.a_begin())),
+        tick_(std::log(factors.a_end() / factors.a_begin()) / static_cast<double>(TimeLine::ticks)) {}
+
+  double ln_a(double tick) const { return ln_begin_ + tick * tick_; }
+  double scale_factor(double tick) const { return std::exp(ln_a(tick)); }
+  double ln_a_per_tick() const { return tick_; }
+
+  // x' += v' drift; v' += A'_g gravity_kick; v' += A'_h hydro_kick; u' += U' drift (the
+  // energy equation's factor is the drift's); time: cosmic time.
+  double drift(double t0, double t1) const { return between(cosmology::IntegrationFactors::drift, t0, t1); }
+  double gravity_kick(double t0, double t1) const { return between(cosmology::IntegrationFactors::gravity_kick, t0, t1); }
+  double hydro_kick(double t0, double t1) const { return between(cosmology::IntegrationFactors::hydro_kick, t0, t1); }
+  double cosmic_time(double t0, double t1) const { return between(cosmology::IntegrationFactors::time, t0, t1); }
+
+  // The largest bin whose step in ln a, at the expansion rate H(a) of tick ti, lasts at most a
+  // physical time dt, and at most dln_a_max in ln a; -1 if dt is below one tick.
+  int bin_for(double dt, IntegerTime ti, double dln_a_max) const {
+    const double hubble = factors_->background().hubble(scale_factor(static_cast<double>(ti)));
+    const double dln_a = std::min(hubble * dt, dln_a_max);
+    const double ratio = dln_a / tick_;
+    if (!(ratio >= 1.0)) return -1;
+    int b = static_cast<int>(std::floor(std::log2(ratio)));
+    if (b > TimeLine::max_bin) b = TimeLine::max_bin;
+    while (b > 0 && std::ldexp(tick_, b) > dln_a) --b;
+    return b;
+  }
+
+ private:
+  double between(cosmology::IntegrationFactors::Kind k, double t0, double t1) const {
+    return factors_->factor_between_ln(k, ln_a(t0), ln_a(t1));
+  }
+  const cosmology::IntegrationFactors* factors_;
+  double ln_begin_, tick_;
 };
 
 }  // namespace fountain
