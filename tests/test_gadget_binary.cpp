@@ -175,5 +175,39 @@ TEST(GadgetBinary, BadFilesAreNamedWithTheirBlock) {
   }
 }
 
+// A zoom written by MUSIC's gadget2 plug-in (tests/data/music/zoom_gadget2.conf): 16^3 coarse
+// cells, a refined patch of 8^3 with gas, the coarse particles as type 5. What the file must
+// say, read by Fountain: the header MUSIC wrote from the configuration, one mass per type, the
+// gas-to-dark-matter ratio Omega_b / (Omega_m - Omega_b) in the refined patch, every position
+// in the box, and the box's whole matter content, Omega_m rho_crit0 L^3.
+TEST(GadgetBinary, ReadsInitialConditionsWrittenByMusic) {
+  const GadgetSnapshot s = read_gadget_binary(std::string(FOUNTAIN_SOURCE_DIR) + "/tests/data/music/zoom_gadget2.dat");
+  const GadgetHeader& h = s.header;
+  EXPECT_DOUBLE_EQ(h.time, 1.0 / 50.0);
+  EXPECT_DOUBLE_EQ(h.redshift, 49.0);
+  EXPECT_DOUBLE_EQ(h.box_size, 26.6);
+  EXPECT_DOUBLE_EQ(h.omega0, 0.3);
+  EXPECT_DOUBLE_EQ(h.omega_lambda, 0.7);
+  EXPECT_DOUBLE_EQ(h.hubble_param, 0.6);
+  EXPECT_EQ(s.types[0].x.size(), 640u);
+  EXPECT_EQ(s.types[1].x.size(), 640u);
+  EXPECT_EQ(s.types[5].x.size(), 4016u);
+  EXPECT_NEAR(h.mass_table[0] / h.mass_table[1], 0.03 / 0.27, 1e-6);
+  double total = 0.0;
+  for (const GadgetParticles& p : s.types) {
+    for (const double m : p.mass) total += m;
+    for (const Vec3& x : p.x)
+      for (int d = 0; d < 3; ++d) {
+        EXPECT_GE(x[d], 0.0);
+        EXPECT_LT(x[d], 26.6);
+      }
+  }
+  // rho_crit0 = 27.7537 x 1e10 Msun/h per (Mpc/h)^3 (MUSIC's mass unit is 1e10 Msun/h).
+  EXPECT_NEAR(total / (0.3 * 27.75366 * 26.6 * 26.6 * 26.6), 1.0, 1e-3);
+  ASSERT_EQ(s.types[0].u.size(), 640u);  // one temperature for all gas
+  for (const double u : s.types[0].u) EXPECT_EQ(u, s.types[0].u.front());
+  EXPECT_GT(s.types[0].u.front(), 0.0);
+}
+
 }  // namespace
 }  // namespace fountain::io
