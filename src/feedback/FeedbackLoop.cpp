@@ -131,7 +131,7 @@ void promote(StepContext& ctx, FeedbackState& fb, std::size_t i) {
   gas.h_msph[i] = h;
   gas.rho[i] = rho;
   gas.rho_msph[i] = rho;
-  hydro::prepare_force(gas, i, ctx.hydro);
+  hydro::prepare_force(gas, i, ctx.hydro, ctx.expansion.hubble_flow);
 }
 
 }  // namespace fountain::feedback

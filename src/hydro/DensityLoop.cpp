@@ -26,7 +26,9 @@ FOUNTAIN_VECTOR_CLONES void density_sums(StepContext& ctx, const Cell& a, const 
       const std::size_t j = near.index[k];
       const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
       const Vec3 dv = vi - gas.v[j];
-      if (p.msph && j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, near.r2[k], p)) continue;
+      if (p.msph && j != i &&
+          msph_decoupled(si, msph_state(gas, j), dx, pair_flow(dv, dx, ctx.expansion.hubble_flow), near.r2[k], p))
+        continue;
       q.add(dx, dv, near.r2[k], gas.mass[j]);
     }
     const DensitySums s = sum_density_pairs(q, hi);

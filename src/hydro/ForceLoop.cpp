@@ -9,8 +9,11 @@
 
 namespace fountain::hydro {
 
-void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p) {
-  const ForceState s = make_force_state(gas.v[i], gas.mass[i], gas.rho[i], gas.u[i], gas.h[i], gas.div_v[i],
+void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p, double hubble_flow) {
+  // The Balsara switch compares physical divergence and curl: comoving, D'/a^2 + 3H and
+  // |C'|/a^2 against c/h = c'/(a^2 h') (gamma = 5/3), i.e. D' + 3 a^2 H, |C'| and c'/h'.
+  const double div_v = hubble_flow != 0.0 ? gas.div_v[i] + 3.0 * hubble_flow : gas.div_v[i];
+  const ForceState s = make_force_state(gas.v[i], gas.mass[i], gas.rho[i], gas.u[i], gas.h[i], div_v,
                                         gas.curl_v[i], p);
   gas.soundspeed[i] = s.c;
   gas.p_over_rho_a[i] = s.p_over_rho_a;
@@ -71,6 +74,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
   const bool msph = p.msph, limiter = p.timestep_limiter;
   const bool signal_velocity = p.courant_criterion == CourantCriterion::SignalVelocity;
   const int limiter_bins = p.limiter_bins;
+  const double hubble_flow = ctx.expansion.hubble_flow;
   thread_local ForcePairs q;  // the pairs of one particle at a time
   long long decoupled = 0;    // pair forces the MSPH rule dropped: one count per cell, not per pair
   for_each_active_group(ctx, a, block, true, [&](std::size_t i, NeighbourBlock& near) __attribute__((always_inline)) {
@@ -88,7 +92,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
         const std::size_t j = near.index[k];
         if (j == i) continue;
         const Vec3 dx{xi.x - near.x[k], xi.y - near.y[k], xi.z - near.z[k]};
-        if (msph_decoupled(si, msph_state(gas, j), dx, fi.v - gas.v[j], near.r2[k], p)) {
+        if (msph_decoupled(si, msph_state(gas, j), dx, pair_flow(fi.v - gas.v[j], dx, hubble_flow), near.r2[k], p)) {
           ++decoupled;
           continue;
         }
@@ -102,7 +106,10 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
       }
     }
     list_force_pairs(gas, near, hit, kept, xi, fi.v, q);
-    const ForceSums s = signal_velocity ? sum_force_pairs<true>(fi, q, p) : sum_force_pairs<false>(fi, q, p);
+    const ForceSums s = hubble_flow != 0.0 ? (signal_velocity ? sum_force_pairs<true, true>(fi, q, p, hubble_flow)
+                                                              : sum_force_pairs<false, true>(fi, q, p, hubble_flow))
+                        : signal_velocity ? sum_force_pairs<true>(fi, q, p)
+                                          : sum_force_pairs<false>(fi, q, p);
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
     if (signal_velocity) gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);

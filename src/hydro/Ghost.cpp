@@ -41,7 +41,7 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
       const double r2 = dot(dx, dx);
       if (r2 >= r2max) continue;
       const Vec3 dv = gas.v[i] - gas.v[j];
-      if (j != i && msph_decoupled(si, msph_state(gas, j), dx, dv, r2, p)) continue;
+      if (j != i && msph_decoupled(si, msph_state(gas, j), dx, pair_flow(dv, dx, ctx.expansion.hubble_flow), r2, p)) continue;
       out.add(dx, dv, r2, gas.mass[j]);
     }
   };
@@ -128,7 +128,7 @@ void ghost(StepContext& ctx, int ci) {
     gas.wcount_dh[i] = res.wcount_dh;
     gas.div_v[i] = res.div_v;
     gas.curl_v[i] = res.curl_v;
-    prepare_force(gas, i, p);
+    prepare_force(gas, i, p, ctx.expansion.hubble_flow);
     gas.courant_bin[i] = static_cast<TimeBin>(ctx.courant_bin(i));
   }
   double h_max = 0.0;

@@ -68,6 +68,13 @@ inline double mu_ij(const Vec3& dx, const Vec3& dv, double r2, double h_ij) {
   return vr < 0.0 ? h_ij * vr / (r2 + 0.01 * h_ij * h_ij) : 0.0;
 }
 
+// A pair's velocity difference as viscosity and the MSPH rule see it: in a comoving run the
+// peculiar v'_i - v'_j plus the Hubble flow a^2 H (x_i - x_j) between them (hubble_flow =
+// a^2 H; 0 in plain time, where the difference is returned untouched).
+inline Vec3 pair_flow(const Vec3& dv, const Vec3& dx, double hubble_flow) {
+  return hubble_flow != 0.0 ? dv + hubble_flow * dx : dv;
+}
+
 // D(i,j) of the paper: i ignores the much denser, much colder j unless they shock together.
 inline bool msph_ignores(const MsphState& i, const MsphState& j, double mu, double c_ij,
                          const HydroParams& p) {
@@ -293,9 +300,12 @@ struct ForcePairs {
 
 // kSignalVelocity: also the largest pair signal velocity, which only the signal-velocity Courant
 // criterion reads (the default criterion's loops skip it).
-template <bool kSignalVelocity>
+// kComoving: a comoving run's pairs (docs/physics.md §11): viscosity, its heating and the
+// signal velocity take the pair velocity with the Hubble flow, w = v'_ij . x_ij + a^2 H r^2;
+// the pressure term of the energy equation the peculiar v'_ij alone.
+template <bool kSignalVelocity, bool kComoving = false>
 [[gnu::always_inline]] inline void iact_force_lanes(const ForceState& i, const ForcePairs& q, std::size_t b, const HydroParams& p,
-                             ForceLanes& s) {
+                             ForceLanes& s, double hubble_flow = 0.0) {
   const double hi_inv = 1.0 / i.h;
   const double alpha = p.viscosity_alpha;
   const double *qdx = q.dx.data() + b, *qdy = q.dy.data() + b, *qdz = q.dz.data() + b, *qr2 = q.r2.data() + b;
@@ -316,7 +326,8 @@ template <bool kSignalVelocity>
                                        (uj < 0.5 ? -12.0 * uj + 18.0 * uj * uj : -6.0 * tj * tj)
                                  : 0.0;
     const double dw_mean_over_r = 0.5 * (dwi + dwj) * inv_r;
-    const double vr = qvx[l] * qdx[l] + qvy[l] * qdy[l] + qvz[l] * qdz[l];
+    const double vr_peculiar = qvx[l] * qdx[l] + qvy[l] * qdy[l] + qvz[l] * qdz[l];
+    const double vr = kComoving ? vr_peculiar + hubble_flow * r2 : vr_peculiar;
     const double h_ij = 0.5 * (i.h + qh[l]);
     const double mu = vr < 0.0 ? h_ij * vr / (r2 + 0.01 * h_ij * h_ij) : 0.0;
     const double c_ij = 0.5 * (i.c + qc[l]);
@@ -329,18 +340,23 @@ template <bool kSignalVelocity>
     s.ax[l] -= qdx[l] * f;
     s.ay[l] -= qdy[l] * f;
     s.az[l] -= qdz[l] * f;
-    s.du_dt[l] += qm[l] * (p_ji + 0.5 * visc) * dw_mean_over_r * vr;
+    if constexpr (kComoving)
+      s.du_dt[l] += qm[l] * (p_ji * vr_peculiar + 0.5 * visc * vr) * dw_mean_over_r;
+    else
+      s.du_dt[l] += qm[l] * (p_ji + 0.5 * visc) * dw_mean_over_r * vr;
     // A padding pair (c_j = 0, at rest) gives c_i, below any real pair's value.
     if constexpr (kSignalVelocity) s.v_sig[l] = std::max(s.v_sig[l], signal_velocity(i.c, qc[l], vr, inv_r));
   }
 }
 
 // Particle i's force sums over its listed pairs.
-template <bool kSignalVelocity>
-[[gnu::always_inline]] inline ForceSums sum_force_pairs(const ForceState& i, ForcePairs& q, const HydroParams& p) {
+template <bool kSignalVelocity, bool kComoving = false>
+[[gnu::always_inline]] inline ForceSums sum_force_pairs(const ForceState& i, ForcePairs& q, const HydroParams& p,
+                                                         double hubble_flow = 0.0) {
   ForceLanes lanes;
   const std::size_t end = q.pad();
-  for (std::size_t b = 0; b < end; b += kLanes) iact_force_lanes<kSignalVelocity>(i, q, b, p, lanes);
+  for (std::size_t b = 0; b < end; b += kLanes)
+    iact_force_lanes<kSignalVelocity, kComoving>(i, q, b, p, lanes, hubble_flow);
   return lanes.total();
 }
 

@@ -24,7 +24,8 @@ inline MsphState msph_state(const GasParticles& gas, std::size_t i) {
 
 // Fills particle i's prepared force inputs (pressure, sound speed, rho powers, Balsara)
 // from its predicted state; the drift and the ghost call it.
-void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p);
+// hubble_flow: a^2 H in a comoving run (StepContext::expansion), 0 otherwise.
+void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p, double hubble_flow = 0.0);
 
 // Particle i's force inputs, as prepared.
 inline ForceState force_state(const GasParticles& gas, std::size_t i) {

@@ -26,6 +26,7 @@ struct LongRangeForce;
 struct IntegrationParams {
   double dt_min = 1e-8;
   double dt_max = 1e-6;
+  double max_dln_a = 0.01;  // comoving runs: the largest step in ln a
 };
 
 struct StepContext {
@@ -55,6 +56,18 @@ struct StepContext {
   std::unique_ptr<gravity::LongRangeForce> long_range{};
 
   IntegerTime ti_current = 0;
+
+  // Comoving runs (docs/physics.md §11): the timeline in ln a, and the expansion at
+  // ti_current, which the force and timestep calculations read; null for plain time.
+  const ComovingTimeLine* comoving = nullptr;
+  struct Expansion {
+    double a = 1.0;
+    double hubble = 0.0;       // H(a), internal units
+    double hubble_flow = 0.0;  // a^2 H: the Hubble flow's part of v' per comoving length
+  };
+  Expansion expansion{};
+  // Sets ti_current and the expansion there.
+  void set_time(IntegerTime ti);
 
   // A parallel loop for use inside a task (Executor::for_each_in_task), empty on one thread:
   // a task whose work splits (a cell's gravity walk) lets idle threads help, so that a big

@@ -68,6 +68,7 @@ class ComovingTimeLine {
   double ln_a(double tick) const { return ln_begin_ + tick * tick_; }
   double scale_factor(double tick) const { return std::exp(ln_a(tick)); }
   double ln_a_per_tick() const { return tick_; }
+  double hubble(double tick) const { return factors_->background().hubble(scale_factor(tick)); }
 
   // x' += v' drift; v' += A'_g gravity_kick; v' += A'_h hydro_kick; u' += U' drift (the
   // energy equation's factor is the drift's); time: cosmic time.

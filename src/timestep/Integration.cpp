@@ -15,17 +15,67 @@
 namespace fountain {
 
 
+void StepContext::set_time(IntegerTime ti) {
+  ti_current = ti;
+  if (!comoving) return;
+  const double t = static_cast<double>(ti);
+  expansion.a = comoving->scale_factor(t);
+  expansion.hubble = comoving->hubble(t);
+  expansion.hubble_flow = expansion.a * expansion.a * expansion.hubble;
+}
+
+namespace {
+
+// The Courant step of gas particle i. A comoving run's state is comoving (x', v', h', rho',
+// u' with u = u' / a^2 for gamma = 5/3); the criterion is physical: h = a h', c = c' / a,
+// |v| = |v'| / a, div v = D' / a^2 + 3 H, and the signal velocity (its pair velocities carry
+// the Hubble flow) v_sig' / a.
+double courant_dt(const StepContext& ctx, std::size_t i, double v_sig) {
+  const GasParticles& gas = ctx.gas;
+  const double cs = hydro::sound_speed(gas.rho[i], gas.u[i], ctx.hydro.gamma);
+  if (!ctx.comoving) return hydro::hydro_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), v_sig, ctx.hydro);
+  const double a = ctx.expansion.a;
+  return hydro::hydro_timestep(a * gas.h[i], gas.div_v[i] / (a * a) + 3.0 * ctx.expansion.hubble, cs / a,
+                               norm(gas.v[i]) / a, v_sig / a, ctx.hydro);
+}
+
+// The bin of a physical step dt, capped by dt_max (and, comoving, the largest step in ln a).
+int bin_of(const StepContext& ctx, double dt) {
+  if (!ctx.comoving) return std::min(ctx.timeline.bin_for(dt), ctx.timeline.bin_for(ctx.integration.dt_max));
+  return ctx.comoving->bin_for(std::min(dt, ctx.integration.dt_max), ctx.ti_current, ctx.integration.max_dln_a);
+}
+
+}  // namespace
+
 int StepContext::courant_bin(std::size_t i) const {
   const double cs = hydro::sound_speed(gas.rho[i], gas.u[i], hydro.gamma);
   // Before this step's force loop: the signal velocity is the last force loop's.
-  const double dt =
-      hydro::hydro_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), std::max(gas.v_sig[i], 2.0 * cs), hydro);
-  const int bin = std::min({timeline.bin_for(dt), timeline.bin_for(integration.dt_max),
-                            TimeLine::largest_aligned_bin(ti_current)});
+  const double dt = courant_dt(*this, i, std::max(gas.v_sig[i], 2.0 * cs));
+  const int bin = std::min(bin_of(*this, dt), TimeLine::largest_aligned_bin(ti_current));
   return std::max(bin, 0);
 }
 
 namespace {
+
+// The leapfrog's factors over ticks [t0, t1]: for gravity's acceleration, hydro's, and the
+// energy equation's rate. Plain time: all three are the interval. Comoving: the integrals of
+// dt/a, dt/a^(3 gamma - 3) and dt/a^2 (docs/physics.md §9).
+struct KickFactors {
+  double gravity, hydro, energy;
+};
+KickFactors comoving_kick(const StepContext& ctx, double t0, double t1) {
+  return {ctx.comoving->gravity_kick(t0, t1), ctx.comoving->hydro_kick(t0, t1), ctx.comoving->drift(t0, t1)};
+}
+// The closing half kick of a step that began at ti_begin and ends now: from its midpoint on.
+KickFactors closing_half(const StepContext& ctx, IntegerTime ti_begin) {
+  const double end = static_cast<double>(ctx.ti_current);
+  return comoving_kick(ctx, 0.5 * (static_cast<double>(ti_begin) + end), end);
+}
+// The opening half kick of a step of `bin` that begins now: up to its midpoint.
+KickFactors opening_half(const StepContext& ctx, int bin) {
+  const double begin = static_cast<double>(ctx.ti_current);
+  return comoving_kick(ctx, begin, begin + 0.5 * static_cast<double>(TimeLine::step_ticks(bin)));
+}
 
 // exp(x), with the argument kept small: drifting h and rho is a prediction, not a law.
 double bounded_exp(double x) { return std::exp(std::clamp(x, -0.2, 0.2)); }
@@ -43,6 +93,13 @@ double gravity_timestep(const GravityParams& g, double softening, const Vec3& a)
   return a_norm > 0.0 ? std::sqrt(2.0 * g.eta * softening / a_norm) : std::numeric_limits<double>::infinity();
 }
 
+// The same in a comoving run, on physical quantities: softening a eps', acceleration
+// A'_g / a^2 + A'_h / a^3 (gamma = 5/3).
+double physical_gravity_timestep(const StepContext& ctx, double softening, const Vec3& a_grav, const Vec3& a_hydro) {
+  const double a = ctx.expansion.a;
+  return gravity_timestep(ctx.gravity, a * softening, a_grav * (1.0 / (a * a)) + a_hydro * (1.0 / (a * a * a)));
+}
+
 }  // namespace
 
 namespace integration {
@@ -55,7 +112,11 @@ std::string tick_text(const TimeLine& t) {
 void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
-  const double dt = ctx.timeline.drift_factor(cell.ti_drift, ctx.ti_current);
+  const double dt = ctx.comoving ? ctx.comoving->drift(static_cast<double>(cell.ti_drift), static_cast<double>(ctx.ti_current))
+                                 : ctx.timeline.drift_factor(cell.ti_drift, ctx.ti_current);
+  // The predicted velocities and energies over the drift (comoving: each with its own factor).
+  const KickFactors k = ctx.comoving ? comoving_kick(ctx, static_cast<double>(cell.ti_drift), static_cast<double>(ctx.ti_current))
+                                     : KickFactors{dt, dt, dt};
   // The MSPH rule reads a neighbour's sound speed in the density loop, before its ghost.
   const bool ghost_prepares =
       force_inputs == ForceInputs::UnlessGhost && !ctx.hydro.msph && cell.ti_end_min == ctx.ti_current;
@@ -64,9 +125,12 @@ void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (dt != 0.0) {
       gas.x[i] += gas.v_full[i] * dt;
-      gas.v[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
+      if (ctx.comoving)
+        gas.v[i] += gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+      else
+        gas.v[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       const double u_before = gas.u[i];
-      gas.u[i] = kicked_energy(ctx, u_before, gas.du_dt[i], dt);
+      gas.u[i] = kicked_energy(ctx, u_before, gas.du_dt[i], k.energy);
       // A safety net, as in the closing kick: the prediction never takes u below half of
       // the smaller of its value and the cooling floor, whatever changed the particle mid-step.
       if (ctx.cooling) gas.u[i] = std::max(gas.u[i], 0.5 * std::min(u_before, ctx.cooling->floor_energy()));
@@ -76,14 +140,14 @@ void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
     }
     gas.rho_msph[i] = gas.rho[i];
     gas.h_msph[i] = gas.h[i];
-    if (prepare && (!ghost_prepares || !ctx.is_active(i))) hydro::prepare_force(gas, i, ctx.hydro);
+    if (prepare && (!ghost_prepares || !ctx.is_active(i))) hydro::prepare_force(gas, i, ctx.hydro, ctx.expansion.hubble_flow);
     h_max = std::max(h_max, gas.h[i]);
   }
   if (dt != 0.0) {
     CollisionlessParticles& dm = ctx.dm;
     for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
       dm.x[i] += dm.v_full[i] * dt;
-      dm.v[i] += dm.a_grav[i] * dt;
+      dm.v[i] += dm.a_grav[i] * k.gravity;
     }
   }
   cell.dx_max += cell.v_max * std::fabs(dt);
@@ -104,6 +168,16 @@ void kick_close(StepContext& ctx, int c) {
     // Half of the step that ends now (shorter than its bin's if the particle was woken).
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
+      if (ctx.comoving) {
+        const KickFactors k = closing_half(ctx, gas.ti_begin[i]);
+        gas.v_full[i] += gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+        // No cooling in comoving runs (yet); hydro alone never halves u in one kick (GADGET).
+        const double u_half = gas.u_full[i];
+        gas.u_full[i] = std::max(u_half + gas.du_dt[i] * k.energy, 0.5 * u_half);
+        gas.v[i] = gas.v_full[i];
+        gas.u[i] = gas.u_full[i];
+        continue;
+      }
       gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       // du_dt is now the hydro rate at the step's end (the force loop just reset it); the
       // cooling part of the step being closed was set at its start and applies to this half too.
@@ -125,7 +199,9 @@ void kick_close(StepContext& ctx, int c) {
   CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
     if (ctx.is_active_dm(i)) {
-      dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current));
+      const double kick = ctx.comoving ? closing_half(ctx, dm.ti_begin[i]).gravity
+                                       : 0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current);
+      dm.v_full[i] += dm.a_grav[i] * kick;
       dm.v[i] = dm.v_full[i];
     }
 }
@@ -134,7 +210,7 @@ void timestep(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
   const HydroParams& p = ctx.hydro;
-  const int max_bin = std::min(ctx.timeline.bin_for(ctx.integration.dt_max),
+  const int max_bin = std::min(ctx.comoving ? bin_of(ctx, ctx.integration.dt_max) : ctx.timeline.bin_for(ctx.integration.dt_max),
                                TimeLine::largest_aligned_bin(ctx.ti_current));
   IntegerTime ti_end_min = TimeLine::ticks;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
@@ -147,16 +223,17 @@ void timestep(StepContext& ctx, int c) {
                                      gas.id[i], ctx.timeline.time(ctx.ti_current), rho, u,
                                      gas.du_dt[i], norm(gas.a_hydro[i])));
       const double cs = hydro::sound_speed(rho, u, p.gamma);
-      double dt = hydro::hydro_timestep(gas.h[i], gas.div_v[i], cs, norm(gas.v[i]), gas.v_sig[i], p);
+      double dt = courant_dt(ctx, i, gas.v_sig[i]);
       if (ctx.gravity.enabled)
-        dt = std::min(dt, gravity_timestep(ctx.gravity, ctx.gravity.softening_gas, gas.a_hydro[i] + gas.a_grav[i]));
+        dt = std::min(dt, ctx.comoving ? physical_gravity_timestep(ctx, ctx.gravity.softening_gas, gas.a_grav[i], gas.a_hydro[i])
+                                       : gravity_timestep(ctx.gravity, ctx.gravity.softening_gas, gas.a_hydro[i] + gas.a_grav[i]));
       if (dt < ctx.integration.dt_min)
         throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {} (h = {}, "
                                      "c = {}, |v| = {}, div v = {}, v_sig = {}, |a_hydro| = {}, |a_grav| = {})",
                                      gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current),
                                      gas.h[i], cs, norm(gas.v[i]), gas.div_v[i], gas.v_sig[i], norm(gas.a_hydro[i]),
                                      norm(gas.a_grav[i])));
-      int bin = std::min(ctx.timeline.bin_for(dt), max_bin);
+      int bin = std::min(ctx.comoving ? bin_of(ctx, dt) : ctx.timeline.bin_for(dt), max_bin);
       if (p.timestep_limiter) bin = std::min<int>(bin, gas.limit_bin[i]);
       gas.limit_bin[i] = kNoBin;
       gas.ti_begin[i] = ctx.ti_current;
@@ -175,12 +252,13 @@ void timestep(StepContext& ctx, int c) {
         throw InputError(fmt::format("{} particle id {} has a non-finite state at t = {} (|x| = {}, |v| = {}, |a| = {})",
                                      species_name(dm.species[i]), dm.id[i], ctx.timeline.time(ctx.ti_current), norm(dm.x[i]), norm(dm.v_full[i]),
                                      norm(dm.a_grav[i])));
-      const double dt = gravity_timestep(ctx.gravity, ctx.gravity.softening(dm.species[i]), dm.a_grav[i]);
+      const double dt = ctx.comoving ? physical_gravity_timestep(ctx, ctx.gravity.softening(dm.species[i]), dm.a_grav[i], Vec3{})
+                                     : gravity_timestep(ctx.gravity, ctx.gravity.softening(dm.species[i]), dm.a_grav[i]);
       if (dt < ctx.integration.dt_min)
         throw InputError(fmt::format("{} particle id {} needs a timestep {} below dt_min = {} at t = {}",
                                      species_name(dm.species[i]), dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
       // Without gravity (stars spawned in a hydro-only run) nothing limits the step but dt_max.
-      const int bin = std::isfinite(dt) ? std::min(ctx.timeline.bin_for(dt), max_bin) : max_bin;
+      const int bin = std::isfinite(dt) ? std::min(ctx.comoving ? bin_of(ctx, dt) : ctx.timeline.bin_for(dt), max_bin) : max_bin;
       if (bin < 0)
         throw InputError(fmt::format("{} particle id {} needs a timestep {} at t = {}, shorter than one tick of the "
                                      "timeline ({})",
@@ -200,17 +278,25 @@ void kick_open(StepContext& ctx, int c) {
   double v_max = 0.0;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (ctx.is_active(i)) {
-      const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
-      gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
-      gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], dt);
-      cell.radiated -= gas.mass[i] * gas.du_dt_cool[i] * dt;
+      if (ctx.comoving) {
+        const KickFactors k = opening_half(ctx, gas.time_bin[i]);
+        gas.v_full[i] += gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+        gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], k.energy);
+      } else {
+        const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
+        gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
+        gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], dt);
+        cell.radiated -= gas.mass[i] * gas.du_dt_cool[i] * dt;
+      }
     }
     v_max = std::max(v_max, norm(gas.v_full[i]));
   }
   cell.v_max = v_max;
   CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
-    if (ctx.is_active_dm(i)) dm.v_full[i] += dm.a_grav[i] * (0.5 * ctx.timeline.step(dm.time_bin[i]));
+    if (ctx.is_active_dm(i))
+      dm.v_full[i] += dm.a_grav[i] * (ctx.comoving ? opening_half(ctx, dm.time_bin[i]).gravity
+                                                   : 0.5 * ctx.timeline.step(dm.time_bin[i]));
 }
 
 void wake(StepContext& ctx, int c) {
@@ -226,10 +312,19 @@ void wake(StepContext& ctx, int c) {
     const IntegerTime new_end = TimeLine::step_end(w, ctx.ti_current);
     if (new_end >= old_end) continue;
     // Take back the part of the opening kick that belonged to the cut-off end of the step.
-    const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
-    gas.v_full[i] -= (gas.a_hydro[i] + gas.a_grav[i]) * undo;
-    gas.u_full[i] -= gas.du_dt[i] * undo;
-    cell.radiated += gas.mass[i] * gas.du_dt_cool[i] * undo;
+    if (ctx.comoving) {
+      // From the new step's midpoint to the old one's.
+      const double begin = static_cast<double>(gas.ti_begin[i]);
+      const KickFactors k = comoving_kick(ctx, 0.5 * (begin + static_cast<double>(new_end)),
+                                          0.5 * (begin + static_cast<double>(old_end)));
+      gas.v_full[i] -= gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+      gas.u_full[i] -= gas.du_dt[i] * k.energy;
+    } else {
+      const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
+      gas.v_full[i] -= (gas.a_hydro[i] + gas.a_grav[i]) * undo;
+      gas.u_full[i] -= gas.du_dt[i] * undo;
+      cell.radiated += gas.mass[i] * gas.du_dt_cool[i] * undo;
+    }
     gas.time_bin[i] = static_cast<TimeBin>(w);
     cell.ti_end_min = std::min(cell.ti_end_min, new_end);
   }
