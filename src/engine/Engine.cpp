@@ -17,6 +17,7 @@
 #include "gravity/GravityLoop.hpp"
 #include "gravity/GravityTasks.hpp"
 #include "gravity/LongRangeForce.hpp"
+#include "cosmology/IntegrationFactors.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "hydro/HydroTasks.hpp"
 #include "star_formation/StarFormationLoop.hpp"
@@ -74,9 +75,27 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
                                  !config_.gravity.enabled && !config_.star_formation.enabled,
                                  config_.repartition_imbalance, config_.repartition_min_steps);
   if (config_.star_formation.enabled) setup_star_formation();
+  if (config_.comoving.enabled) setup_comoving();
   if (config_.gravity.enabled && config_.space.periodic) setup_periodic_gravity();
   register_tasks();
   guess_smoothing_lengths();
+}
+
+// A comoving run: the 2^56 ticks span ln a_begin .. ln a_end (the plain timeline then reads
+// ln a), and the forces and criteria read the expansion at each step's time.
+void Engine::setup_comoving() {
+  const ComovingConfig& c = config_.comoving;
+  if (std::fabs(config_.hydro.gamma - 5.0 / 3.0) > 1e-12)
+    throw InputError(fmt::format("a comoving run needs hydro.gamma = 5/3 (its u' = a^2 u); it is {}", config_.hydro.gamma));
+  if (config_.cooling.enabled || config_.star_formation.enabled)
+    throw InputError("cooling, star formation and feedback are not yet available in comoving runs");
+  background_ = std::make_unique<cosmology::Background>(c.cosmology);
+  expansion_factors_ = std::make_unique<cosmology::IntegrationFactors>(*background_, config_.hydro.gamma, c.a_begin, c.a_end);
+  comoving_ = std::make_unique<ComovingTimeLine>(*expansion_factors_);
+  timeline_.t_begin = std::log(c.a_begin);
+  timeline_.t_end = std::log(c.a_end);
+  ctx_->comoving = comoving_.get();
+  ctx_->set_time(0);
 }
 
 // TreePM in a periodic box (docs/gravity.md, "Periodic TreePM"): the mesh is a cube over the
@@ -340,7 +359,7 @@ void Engine::build_graph() {
 }
 
 void Engine::drift_current(integration::ForceInputs force_inputs) {
-  ctx_->ti_current = ti_current_;
+  ctx_->set_time(ti_current_);
   const auto& leaves = space_.leaves();
   if (leaves.empty()) return;  // before the first rebuild: nothing has moved
   StepContext& ctx = *ctx_;
@@ -435,14 +454,16 @@ std::size_t Engine::activate(Phase phase) {
 
 void Engine::prepare_step(IntegerTime ti) {
   ti_current_ = ti;
-  ctx_->ti_current = ti;
+  ctx_->set_time(ti);
   // How far each leaf's particles will have moved since the rebuild once drifted to ti.
   const auto& leaves = space_.leaves();
   moved_.resize(space_.cells().size());
   double moved_most = 0.0;
   for (int c : leaves) {
     const Cell& cell = space_.cell(c);
-    moved_[static_cast<std::size_t>(c)] = cell.dx_max + cell.v_max * std::fabs(timeline_.drift_factor(cell.ti_drift, ti));
+    const double drift = comoving_ ? comoving_->drift(static_cast<double>(cell.ti_drift), static_cast<double>(ti))
+                                   : timeline_.drift_factor(cell.ti_drift, ti);
+    moved_[static_cast<std::size_t>(c)] = cell.dx_max + cell.v_max * std::fabs(drift);
     moved_most = std::max(moved_most, moved_[static_cast<std::size_t>(c)]);
   }
   // A gas particle of leaf a misses no neighbour while h + dx_a + dx_b stays within the gap
@@ -541,7 +562,9 @@ void Engine::initialise() {
   // Every particle is active at t = 0 whatever its bin. The placeholder is the largest bin,
   // so the first timestep is not held down by the limiter comparing with placeholders (the
   // first force loop's wake requests then bring slow neighbours of fast particles down).
-  const TimeBin start = static_cast<TimeBin>(std::max(0, timeline_.bin_for(config_.integration.dt_max)));
+  const int dt_max_bin = comoving_ ? comoving_->bin_for(config_.integration.dt_max, 0, config_.integration.max_dln_a)
+                                   : timeline_.bin_for(config_.integration.dt_max);
+  const TimeBin start = static_cast<TimeBin>(std::max(0, dt_max_bin));
   for (auto& b : gas_.time_bin) b = start;
   for (auto& b : dm_.time_bin) b = start;
   ti_current_ = 0;

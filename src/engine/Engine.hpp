@@ -188,6 +188,7 @@ class Engine {
   void setup_star_formation();
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   // Each module's task types, in the order the modules run; across ranks the exchanges too.
+  void setup_comoving();
   void setup_periodic_gravity();
   void register_tasks();
   // Across ranks: the ghost results' sends and receives, and the exchanges around feedback
@@ -253,6 +254,10 @@ class Engine {
   tasks::TaskGraph graph_;
   tasks::Executor executor_;
   std::unique_ptr<StepContext> ctx_;
+  // Comoving runs: the expansion and the timeline in ln a (null otherwise).
+  std::unique_ptr<cosmology::Background> background_;
+  std::unique_ptr<cosmology::IntegrationFactors> expansion_factors_;
+  std::unique_ptr<ComovingTimeLine> comoving_;
   std::unique_ptr<cooling::CoolingTable> cooling_table_;
   std::unique_ptr<cooling::RadiativeCooling> cooling_;
   std::vector<tasks::TaskRecord> records_;

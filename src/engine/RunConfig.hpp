@@ -3,6 +3,7 @@
 #include <string>
 
 #include "core/Units.hpp"
+#include "cosmology/Background.hpp"
 #include "cooling/CoolingParams.hpp"
 #include "step/StepContext.hpp"
 #include "gravity/GravityParams.hpp"
@@ -29,9 +30,20 @@ struct RestartConfig {
   double every_minutes = 0.0;
 };
 
+// A comoving run (docs/physics.md §11): the clock is the scale factor from a_begin to a_end,
+// the state comoving (x', v' = a^2 dx/dt, rho', u', h'). Hydro with gamma = 5/3 and gravity;
+// cooling, star formation and feedback are not yet available in comoving form.
+struct ComovingConfig {
+  bool enabled = false;
+  cosmology::CosmologyParams cosmology;
+  double a_begin = 0.02;
+  double a_end = 1.0;
+};
+
 struct RunConfig {
   double t_begin = 0.0;
   double t_end = 1.0;
+  ComovingConfig comoving;
   int threads = 0;
   bool pin_threads = false;  // each task thread bound to one core (tasks/ThreadPinning.hpp)
   long long max_steps = 0;
