@@ -56,15 +56,17 @@ constexpr const char* kDarkMatterGroup = "/DarkMatter";
 std::vector<double> tally_values(const star_formation::StarFormationTally& t) {
   return {t.mass_formed, t.thermal_locked, t.energy_own, t.energy_reservoir, t.energy_hot, t.energy_released,
           t.kinetic_to_heat, static_cast<double>(t.promotions), static_cast<double>(t.stars_spawned),
-          static_cast<double>(t.gas_dissolved), static_cast<double>(t.hot_without_neighbours)};
+          static_cast<double>(t.gas_dissolved), static_cast<double>(t.hot_without_neighbours), t.energy_promoted};
 }
 star_formation::StarFormationTally tally_from(const std::vector<double>& v) {
   star_formation::StarFormationTally t;
-  if (v.size() != 11) return t;
+  // Files written before energy_promoted was kept have 11 values (it is then 0).
+  if (v.size() != 11 && v.size() != 12) return t;
   t.mass_formed = v[0]; t.thermal_locked = v[1]; t.energy_own = v[2]; t.energy_reservoir = v[3];
   t.energy_hot = v[4]; t.energy_released = v[5]; t.kinetic_to_heat = v[6];
   t.promotions = static_cast<long long>(v[7]); t.stars_spawned = static_cast<long long>(v[8]);
   t.gas_dissolved = static_cast<long long>(v[9]); t.hot_without_neighbours = static_cast<long long>(v[10]);
+  if (v.size() == 12) t.energy_promoted = v[11];
   return t;
 }
 

@@ -143,6 +143,8 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   summary.h_max_capped = engine.h_max_capped();
   summary.h_min_held = engine.h_min_held();
   summary.msph_decoupled = engine.msph_decoupled();
+  summary.star_formation = engine.star_formation_total();
+  for (std::size_t i = 0; i < engine.gas().size(); ++i) summary.reservoir_held += engine.gas().reservoir[i];
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   return summary;
 }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "engine/RunConfig.hpp"
+#include "step/StarFormationTally.hpp"
 
 namespace fountain {
 
@@ -27,6 +28,8 @@ struct RunSummary {
   long long h_max_capped = 0;  // particle-steps held at hydro.h_max short of neighbours
   long long h_min_held = 0;    // particle-steps held at the floor of h (hydro.h_min_ratio)
   long long msph_decoupled = 0;  // force interactions the MSPH rule dropped
+  star_formation::StarFormationTally star_formation;  // since the start (runs with star formation)
+  double reservoir_held = 0.0;  // feedback energy still in reservoirs at the end
 };
 
 // How `fountain run` was asked to run, beyond the parameter file.

@@ -115,6 +115,12 @@ int main(int argc, char** argv) {
                    s.h_max_capped);
       if (mpi.rank() == 0 && s.msph_decoupled > 0)
         fmt::print(stderr, "MSPH decoupled {} force interactions\n", s.msph_decoupled);
+      if (const auto& f = s.star_formation; mpi.rank() == 0 && f.mass_formed > 0.0)
+        fmt::print(stderr,
+                   "feedback: {:.4g} into reservoirs; {} promotions let out {:.4g}, {} dissolved particles passed "
+                   "{:.4g} to their neighbours, {:.4g} still held (energy in internal units)\n",
+                   f.energy_reservoir, f.promotions, f.energy_promoted, f.gas_dissolved,
+                   f.energy_released - f.energy_promoted, s.reservoir_held);
       if (mpi.rank() == 0 && s.h_min_held > 0)
         fmt::print(stderr, "{} particle-steps were held at the floor of h (hydro.h_min_ratio)\n", s.h_min_held);
       if (mpi.rank() == 0 && s.ranks > 1)

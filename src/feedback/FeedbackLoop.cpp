@@ -92,6 +92,7 @@ void promote(StepContext& ctx, FeedbackState& fb, std::size_t i) {
   gas.u_full[i] += du;
   gas.u[i] += du;
   tally.energy_released += gas.reservoir[i];
+  tally.energy_promoted += gas.reservoir[i];
   gas.reservoir[i] = 0.0;
   gas.promoted[i] = 1;
   gas.promotion_time[i] = fb.time;

@@ -10,7 +10,8 @@ struct StarFormationTally {
   double energy_own = 0.0;         // feedback to the star-forming particle's own u
   double energy_reservoir = 0.0;   // feedback put into reservoirs (eps_c)
   double energy_hot = 0.0;         // feedback given to hot neighbours (eps_h)
-  double energy_released = 0.0;    // reservoir energy put into u at promotion
+  double energy_released = 0.0;    // reservoir energy let out: at promotions, and with dissolved particles
+  double energy_promoted = 0.0;    // of energy_released, what promotions put into their particles' u
   double kinetic_to_heat = 0.0;    // kinetic energy of inelastic mass transfers, given as heat
   long long promotions = 0;
   long long stars_spawned = 0;
@@ -20,6 +21,7 @@ struct StarFormationTally {
   StarFormationTally& operator+=(const StarFormationTally& o) {
     mass_formed += o.mass_formed; thermal_locked += o.thermal_locked; energy_own += o.energy_own;
     energy_reservoir += o.energy_reservoir; energy_hot += o.energy_hot; energy_released += o.energy_released;
+    energy_promoted += o.energy_promoted;
     kinetic_to_heat += o.kinetic_to_heat; promotions += o.promotions; stars_spawned += o.stars_spawned;
     gas_dissolved += o.gas_dissolved; hot_without_neighbours += o.hot_without_neighbours;
     return *this;
