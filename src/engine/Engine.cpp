@@ -50,7 +50,8 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
       executor_(config.threads, pinned_cpus(config)) {
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
-  if (gas_.size() == 0) throw InputError("no gas particles to simulate");
+  // Dark matter alone (a collisionless cosmological run) needs gravity; nothing at all is no run.
+  if (gas_.size() == 0 && (dm_.size() == 0 || !config_.gravity.enabled)) throw InputError("no gas particles to simulate");
   if (dm_.size() > 0 && !config_.gravity.enabled)
     throw InputError(fmt::format("the initial conditions hold {} dark matter particles but gravity is off "
                                  "(set gravity.enabled: true)",
