@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -285,6 +286,36 @@ TEST(ComovingProblems, ZeldovichPlaneWaveInDarkMatter) {
   std::printf("dark matter plane wave at z = 1.5: rms x %.2e, rms v %.2e of the amplitudes\n", x_rms, v_rms);
   EXPECT_LE(x_rms, 0.02);
   EXPECT_LE(v_rms, 0.03);
+}
+
+// GADGET's RMS-displacement limit: in a step no species moves, on average, more than a
+// quarter of its mean spacing, dt <= 0.25 a^2 d / v'_rms. Fast random motions on a lattice
+// (8^3 dark matter particles, v' of 1e4 km/s) must put every particle in a bin that keeps it.
+TEST(ComovingProblems, StepsKeepTheRmsDisplacementLimit) {
+  const double box = 64.0, a_begin = 0.1;
+  const GasParticles lattice = lattice_gas(8, box, 1.0, 1.0);
+  CollisionlessParticles dm;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> gauss(0.0, 1e4 / std::sqrt(3.0));
+  double v2 = 0.0;
+  for (std::size_t k = 0; k < lattice.size(); ++k) {
+    const Vec3 v{gauss(rng), gauss(rng), gauss(rng)};
+    v2 += dot(v, v);
+    dm.push_back(lattice.id[k], Species::DarkMatter, lattice.mass[k], lattice.x[k], v, v, 0.0, 0);
+  }
+  RunConfig cfg = comoving_config(box, 1.0, 0.0, a_begin, 1.0, 32);
+  cfg.gravity.softening_dark_matter = 1.0;
+  Engine engine(cfg, GasParticles{}, dm);
+  engine.initialise();
+  const double v_rms = std::sqrt(v2 / static_cast<double>(dm.size()));
+  const double hubble = 100.0 * std::pow(a_begin, -1.5);
+  const double limit = hubble * 0.25 * a_begin * a_begin * (box / 8) / v_rms;  // in ln a
+  const double tick = std::log(1.0 / a_begin) / std::ldexp(1.0, TimeLine::max_bin);
+  ASSERT_LT(limit, 0.01);  // the limit, not the largest step in ln a, decides here
+  for (const TimeBin b : engine.dark_matter().time_bin) {
+    EXPECT_LE(std::ldexp(tick, b), limit);
+    EXPECT_GT(std::ldexp(tick, b + 1), 0.5 * limit);  // and no smaller than it needs to be
+  }
 }
 
 }  // namespace

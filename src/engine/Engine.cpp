@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <numbers>
 
 #include "core/IdealGas.hpp"
 #include "core/Error.hpp"
@@ -97,6 +99,39 @@ void Engine::setup_comoving() {
   timeline_.t_end = std::log(c.a_end);
   ctx_->comoving = comoving_.get();
   ctx_->set_time(0);
+}
+
+// The RMS-displacement limit of a comoving run (GADGET-2's MaxRMSDisplacementFac): per
+// species s, dt <= C a^2 d_s / v'_rms,s with d_s = (m_min,s / (Omega_s rho_crit0))^(1/3) the
+// mean spacing of its lightest particles, so that no species moves, on average, more than a
+// quarter of its spacing in a step. Recomputed at each recut, as GADGET does at each domain
+// decomposition; the species' particles are the same on every rank.
+void Engine::set_displacement_limits() {
+  constexpr double kRmsFactor = 0.25;
+  const cosmology::CosmologyParams& c = config_.comoving.cosmology;
+  const double rho_crit = 3.0 * background_->hubble0() * background_->hubble0() /
+                          (8.0 * std::numbers::pi * config_.gravity.G);
+  const double a = comoving_->scale_factor(static_cast<double>(ti_current_));
+  auto limit = [&](std::size_t n, auto&& mass, auto&& velocity, double omega) {
+    double m_min = std::numeric_limits<double>::infinity(), v2 = 0.0;
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!(mass(i) > 0.0)) continue;
+      m_min = std::min(m_min, mass(i));
+      v2 += dot(velocity(i), velocity(i));
+      ++count;
+    }
+    if (count == 0 || !(v2 > 0.0) || !(omega > 0.0)) return std::numeric_limits<double>::infinity();
+    const double spacing = std::cbrt(m_min / (omega * rho_crit));
+    return kRmsFactor * a * a * spacing / std::sqrt(v2 / static_cast<double>(count));
+  };
+  const double omega_dm = gas_.size() > 0 ? c.omega_m - c.omega_b : c.omega_m;
+  const double omega_gas = dm_.size() > 0 ? c.omega_b : c.omega_m;
+  ctx_->dt_rms_gas = limit(
+      gas_.size(), [&](std::size_t i) { return gas_.mass[i]; }, [&](std::size_t i) { return gas_.v_full[i]; }, omega_gas);
+  ctx_->dt_rms_dark_matter = limit(
+      dm_.size(), [&](std::size_t i) { return dm_.species[i] == Species::DarkMatter ? dm_.mass[i] : 0.0; },
+      [&](std::size_t i) { return dm_.v_full[i]; }, omega_dm);
 }
 
 // TreePM in a periodic box (docs/gravity.md, "Periodic TreePM"): the mesh is a cube over the
@@ -209,6 +244,7 @@ void Engine::rebuild() {
     old_holders = layout_.take_holders();
   }
   space_.recut(gas_, dm_, for_each, migrate ? &order : nullptr);
+  if (comoving_) set_displacement_limits();
   ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
   if (ranks_) layout_.assign_owners(space_, measured, steps_);

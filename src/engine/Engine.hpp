@@ -188,6 +188,7 @@ class Engine {
   void setup_star_formation();
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   // Each module's task types, in the order the modules run; across ranks the exchanges too.
+  void set_displacement_limits();
   void setup_comoving();
   void setup_periodic_gravity();
   void register_tasks();

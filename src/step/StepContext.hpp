@@ -1,6 +1,7 @@
 // What every task of a step needs: the particles, the cells, the parameters and the clock.
 #pragma once
 #include <atomic>
+#include <limits>
 
 #include <memory>
 
@@ -66,6 +67,10 @@ struct StepContext {
     double hubble_flow = 0.0;  // a^2 H: the Hubble flow's part of v' per comoving length
   };
   Expansion expansion{};
+  // Comoving runs: the RMS-displacement limits of the physical step, per species (set at each
+  // recut; infinite otherwise).
+  double dt_rms_gas = std::numeric_limits<double>::infinity();
+  double dt_rms_dark_matter = std::numeric_limits<double>::infinity();
   // Sets ti_current and the expansion there.
   void set_time(IntegerTime ti);
 

@@ -44,6 +44,9 @@ int bin_of(const StepContext& ctx, double dt) {
   if (!ctx.comoving) return std::min(ctx.timeline.bin_for(dt), ctx.timeline.bin_for(ctx.integration.dt_max));
   return ctx.comoving->bin_for(std::min(dt, ctx.integration.dt_max), ctx.ti_current, ctx.integration.max_dln_a);
 }
+// The same for a gas or collisionless particle of a comoving run, with its species' RMS
+// displacement limit.
+int gas_bin_of(const StepContext& ctx, double dt) { return bin_of(ctx, std::min(dt, ctx.dt_rms_gas)); }
 
 }  // namespace
 
@@ -233,7 +236,7 @@ void timestep(StepContext& ctx, int c) {
                                      gas.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current),
                                      gas.h[i], cs, norm(gas.v[i]), gas.div_v[i], gas.v_sig[i], norm(gas.a_hydro[i]),
                                      norm(gas.a_grav[i])));
-      int bin = std::min(ctx.comoving ? bin_of(ctx, dt) : ctx.timeline.bin_for(dt), max_bin);
+      int bin = std::min(ctx.comoving ? gas_bin_of(ctx, dt) : ctx.timeline.bin_for(dt), max_bin);
       if (p.timestep_limiter) bin = std::min<int>(bin, gas.limit_bin[i]);
       gas.limit_bin[i] = kNoBin;
       gas.ti_begin[i] = ctx.ti_current;
@@ -258,7 +261,9 @@ void timestep(StepContext& ctx, int c) {
         throw InputError(fmt::format("{} particle id {} needs a timestep {} below dt_min = {} at t = {}",
                                      species_name(dm.species[i]), dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
       // Without gravity (stars spawned in a hydro-only run) nothing limits the step but dt_max.
-      const int bin = std::isfinite(dt) ? std::min(ctx.comoving ? bin_of(ctx, dt) : ctx.timeline.bin_for(dt), max_bin) : max_bin;
+      const double dt_rms = dm.species[i] == Species::DarkMatter ? ctx.dt_rms_dark_matter : ctx.dt_rms_gas;
+      const int bin = ctx.comoving ? std::min(bin_of(ctx, std::min(dt, dt_rms)), max_bin)
+                                   : (std::isfinite(dt) ? std::min(ctx.timeline.bin_for(dt), max_bin) : max_bin);
       if (bin < 0)
         throw InputError(fmt::format("{} particle id {} needs a timestep {} at t = {}, shorter than one tick of the "
                                      "timeline ({})",
