@@ -92,6 +92,9 @@ void Engine::setup_comoving() {
     throw InputError(fmt::format("a comoving run needs hydro.gamma = 5/3 (its u' = a^2 u); it is {}", config_.hydro.gamma));
   if (config_.cooling.enabled || config_.star_formation.enabled)
     throw InputError("cooling, star formation and feedback are not yet available in comoving runs");
+  // The matter of the expanding background gravitates; and with gravity every rank keeps every
+  // particle current, which the displacement limits below read.
+  if (!config_.gravity.enabled) throw InputError("a comoving run needs gravity (gravity.enabled: true)");
   background_ = std::make_unique<cosmology::Background>(c.cosmology);
   expansion_factors_ = std::make_unique<cosmology::IntegrationFactors>(*background_, config_.hydro.gamma, c.a_begin, c.a_end);
   comoving_ = std::make_unique<ComovingTimeLine>(*expansion_factors_);
@@ -105,7 +108,7 @@ void Engine::setup_comoving() {
 // species s, dt <= C a^2 d_s / v'_rms,s with d_s = (m_min,s / (Omega_s rho_crit0))^(1/3) the
 // mean spacing of its lightest particles, so that no species moves, on average, more than a
 // quarter of its spacing in a step. Recomputed at each recut, as GADGET does at each domain
-// decomposition; the species' particles are the same on every rank.
+// decomposition, from every particle (a comoving run has gravity, so every rank holds them all).
 void Engine::set_displacement_limits() {
   constexpr double kRmsFactor = 0.25;
   const cosmology::CosmologyParams& c = config_.comoving.cosmology;
