@@ -57,6 +57,8 @@ class RecordReader {
                                    path, first));
     }
     format_ = first == 8 ? 2 : 1;
+    in_.seekg(0, std::ios::end);
+    file_bytes_ = static_cast<std::uint64_t>(in_.tellg());
     in_.seekg(0);
   }
   bool swap() const { return swap_; }
@@ -84,6 +86,11 @@ class RecordReader {
   }
   std::vector<char> record(const char* block) {
     const std::uint32_t size = marker(block);
+    // A corrupt marker must not ask for gigabytes: the record cannot be longer than the file.
+    const auto at = static_cast<std::uint64_t>(in_.tellg());
+    if (static_cast<std::uint64_t>(size) + 4 > file_bytes_ - std::min(at, file_bytes_))
+      throw InputError(fmt::format("{}: block {} is truncated ({} bytes announced, {} left in the file)", path_, block,
+                                   size, file_bytes_ - std::min(at, file_bytes_)));
     std::vector<char> payload(size);
     if (!in_.read(payload.data(), static_cast<std::streamsize>(size)))
       throw InputError(fmt::format("{}: block {} is truncated ({} bytes announced)", path_, block, size));
@@ -98,6 +105,7 @@ class RecordReader {
   std::ifstream in_;
   bool swap_ = false;
   int format_ = 1;
+  std::uint64_t file_bytes_ = 0;
 };
 
 GadgetHeader parse_header(const std::vector<char>& bytes, bool swap, const std::string& path) {

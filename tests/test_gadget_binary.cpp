@@ -144,6 +144,15 @@ TEST(GadgetBinary, BadFilesAreNamedWithTheirBlock) {
   std::filesystem::resize_file(path, 4 + 256 + 4 + 8 + 15 * 12 + 8 + 40);
   EXPECT_NE(message_of().find("block VEL"), std::string::npos) << message_of();
   EXPECT_NE(message_of().find(path), std::string::npos);
+  // A record marker corrupted to announce 4 GB: named as truncated, nothing that large allocated.
+  write_gadget_binary(path, three_types(), GadgetBinaryLayout{});
+  {
+    std::fstream io(path, std::ios::binary | std::ios::in | std::ios::out);
+    io.seekp(4 + 256 + 4);
+    const std::uint32_t huge = 0xfffffff0u;
+    io.write(reinterpret_cast<const char*>(&huge), 4);
+  }
+  EXPECT_NE(message_of().find("block POS is truncated"), std::string::npos) << message_of();
   // Not GADGET at all.
   {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
