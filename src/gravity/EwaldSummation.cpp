@@ -60,7 +60,7 @@ EwaldField real_space(const Vec3& s, const EwaldSettings& set, bool corrected) {
   const double a = set.alpha, reach = set.real_reach;
   const Vec3 nearest{std::nearbyint(s.x), std::nearbyint(s.y), std::nearbyint(s.z)};
   EwaldField out;
-  int lo[3], hi[3];
+  int lo[3] = {}, hi[3] = {};
   for (int d = 0; d < 3; ++d) {
     lo[d] = static_cast<int>(std::ceil(s[d] - reach));
     hi[d] = static_cast<int>(std::floor(s[d] + reach));

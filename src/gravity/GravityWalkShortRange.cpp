@@ -54,7 +54,7 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
     const TreeNode& node = nodes_[k];
     const auto [cx, cy, cz] = offset(node.com);
     const float gm = static_cast<float>(G * node.mass * gm_scale);
-    float q[6];
+    float q[6] = {};
     for (int i = 0; i < 6; ++i) q[i] = quadrupole ? static_cast<float>(G * node.quadrupole[i] * q_scale) : 0.0f;
     const float trace = quadrupole ? static_cast<float>(G * node.second_moment * q_scale) : 0.0f;
     for (int t = 0; t < lanes; ++t) {

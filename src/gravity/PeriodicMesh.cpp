@@ -107,7 +107,7 @@ void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const doubl
       const Vec3& x = positions[p];
       if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
         throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
-      AxisWeights w[3];
+      AxisWeights w[3]{};
       for (int d = 0; d < 3; ++d) w[d] = axis_weights(x[d] - box_ * std::floor(x[d] / box_), cell_inv, n_);
       const double m = masses[p] * unit_inv;
       for (int corner = 0; corner < 8; ++corner) {
@@ -201,7 +201,7 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
     const std::size_t end = std::min(count, (c + 1) * kChunk);
     for (std::size_t p = c * kChunk; p < end; ++p) {
       const Vec3& x = positions[p];
-      AxisWeights w[3];
+      AxisWeights w[3]{};
       for (int d = 0; d < 3; ++d) w[d] = axis_weights(x[d] - box_ * std::floor(x[d] / box_), cell_inv, n);
       Vec3 acc;
       double pot = 0.0;
