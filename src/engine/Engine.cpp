@@ -501,9 +501,7 @@ void Engine::prepare_step(IntegerTime ti) {
   double moved_most = 0.0;
   for (int c : leaves) {
     const Cell& cell = space_.cell(c);
-    const double drift = comoving_ ? comoving_->drift(static_cast<double>(cell.ti_drift), static_cast<double>(ti))
-                                   : timeline_.drift_factor(cell.ti_drift, ti);
-    moved_[static_cast<std::size_t>(c)] = cell.dx_max + cell.v_max * std::fabs(drift);
+    moved_[static_cast<std::size_t>(c)] = cell.dx_max + cell.v_max * std::fabs(ctx_->drift_factor(cell.ti_drift, ti));
     moved_most = std::max(moved_most, moved_[static_cast<std::size_t>(c)]);
   }
   // A gas particle of leaf a misses no neighbour while h + dx_a + dx_b stays within the gap

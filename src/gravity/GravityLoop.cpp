@@ -1,6 +1,5 @@
 #include "gravity/GravityLoop.hpp"
 
-#include <cmath>
 #include <vector>
 
 #include "gravity/GravityParams.hpp"
@@ -34,14 +33,6 @@ void build_tree(StepContext& ctx) {
     config.box_size = ctx.long_range->mesh.box();
   }
   ctx.tree = std::make_unique<GravityTree>(x, m, eps, config);
-}
-
-int LongRangeForce::choose_cells(int cells, std::size_t particles) {
-  if (cells > 0) return cells;
-  const double per_side = std::cbrt(static_cast<double>(particles));
-  int n = 16;
-  while (n < per_side - 1e-9 && n < 4096) n *= 2;
-  return n;
 }
 
 void compute_long_range(StepContext& ctx) {

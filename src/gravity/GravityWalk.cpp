@@ -132,13 +132,7 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
 // far below the walk's ~1e-3 (docs/gravity.md).
 FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const {
   const int nt = g.n;
-  const int lanes = nt <= 8 ? 8 : kGroupSize;
-  const double unit_inv = 1.0 / length_unit_;
-  // A source's G m in units of length^2 x acceleration (a quadrupole's G Q in length^4 x
-  // acceleration); potentials come out in units of length x acceleration.
-  const double gm_scale = unit_inv * unit_inv / g.accel_unit;
-  const double q_scale = gm_scale * unit_inv * unit_inv;
-  const double pot_unit = length_unit_ * g.accel_unit;
+  const auto [lanes, unit_inv, gm_scale, q_scale, pot_unit] = float_units(nt, length_unit_, g.accel_unit);
   const double G = config.G;
   const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
   float ax[kGroupSize] = {}, ay[kGroupSize] = {}, az[kGroupSize] = {}, pot[kGroupSize] = {};

@@ -57,6 +57,24 @@ struct IndexKey {
 };
 inline IndexKey index_key(std::int32_t i) { return {static_cast<float>(i >> 12), static_cast<float>(i & 4095)}; }
 
+// The float loops' scalings for one group (evaluate_group, evaluate_group_short_range):
+// lengths in the tree's length unit, a source's G m in length^2 x acceleration (a
+// quadrupole's G Q in length^4 x acceleration), potentials in length x acceleration, with
+// accelerations in the group's accel_unit. Lanes: the group padded to 8 or 16.
+struct FloatUnits {
+  int lanes;
+  double unit_inv, gm_scale, q_scale, pot_unit;
+};
+inline FloatUnits float_units(int targets, double length_unit, double accel_unit) {
+  FloatUnits f;
+  f.lanes = targets <= 8 ? 8 : kGroupSize;
+  f.unit_inv = 1.0 / length_unit;
+  f.gm_scale = f.unit_inv * f.unit_inv / accel_unit;
+  f.q_scale = f.gm_scale * f.unit_inv * f.unit_inv;
+  f.pot_unit = length_unit * accel_unit;
+  return f;
+}
+
 // The TreePM short-range factors g_n(u), u = r / (2 r_s), of GravitySplit (force_factor is
 // g_1, potential_factor g_0, then the second and third derivatives' factors), tabulated in
 // float on [0, u_cut] for the walk's float loops (linear interpolation, error ~1e-7, below

@@ -30,11 +30,7 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
                                                                      const InteractionList& list) const {
   const ShortRangeTable& table = *g.short_range;
   const int nt = g.n;
-  const int lanes = nt <= 8 ? 8 : kGroupSize;
-  const double unit_inv = 1.0 / length_unit_;
-  const double gm_scale = unit_inv * unit_inv / g.accel_unit;
-  const double q_scale = gm_scale * unit_inv * unit_inv;
-  const double pot_unit = length_unit_ * g.accel_unit;
+  const auto [lanes, unit_inv, gm_scale, q_scale, pot_unit] = float_units(nt, length_unit_, g.accel_unit);
   const double G = config.G;
   const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
   const float t_per_length = table.u_per_length * table.bins_per_u;

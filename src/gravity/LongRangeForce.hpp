@@ -1,5 +1,6 @@
 // A periodic run's long-range gravity: the mesh and the accelerations and potentials it gave this step's particles.
 #pragma once
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -20,7 +21,13 @@ struct LongRangeForce {
   // The mesh a run of `particles` in a box of side `box` uses: `cells` when set, otherwise
   // the smallest power of two at least the particles per side (and at least 16, so that the
   // short-range cut-off stays below half the box).
-  static int choose_cells(int cells, std::size_t particles);
+  static int choose_cells(int cells, std::size_t particles) {
+    if (cells > 0) return cells;
+    const double per_side = std::cbrt(static_cast<double>(particles));
+    int n = 16;
+    while (n < per_side - 1e-9 && n < 4096) n *= 2;
+    return n;
+  }
 };
 
 }  // namespace fountain::gravity

@@ -37,6 +37,32 @@ AxisWeights axis_weights(double x, double cell_inv, int n) {
   return a;
 }
 
+// fn(i, j, k, weight) for the eight nodes of position x's cloud (x folded into [0, box)):
+// assignment and interpolation share it, so a particle reads back exactly the weights it gave.
+template <class Fn>
+void for_each_cloud_node(const Vec3& x, double box, double cell_inv, int n, Fn&& fn) {
+  AxisWeights w[3]{};
+  for (int d = 0; d < 3; ++d) w[d] = axis_weights(x[d] - box * std::floor(x[d] / box), cell_inv, n);
+  for (int corner = 0; corner < 8; ++corner) {
+    const int i = (corner & 1) ? (w[0].lo + 1) % n : w[0].lo;
+    const int j = (corner & 2) ? (w[1].lo + 1) % n : w[1].lo;
+    const int k = (corner & 4) ? (w[2].lo + 1) % n : w[2].lo;
+    const double weight = ((corner & 1) ? w[0].w_hi : w[0].w_lo) * ((corner & 2) ? w[1].w_hi : w[1].w_lo) *
+                          ((corner & 4) ? w[2].w_hi : w[2].w_lo);
+    fn(i, j, k, weight);
+  }
+}
+
+// fn(p) for every particle p < count, in chunks that for_each may run in parallel.
+template <class Fn>
+void for_each_particle(const ForEach& for_each, std::size_t count, Fn&& fn) {
+  constexpr std::size_t kChunk = 4096;
+  for_each_or_serial(for_each, (count + kChunk - 1) / kChunk, [&](std::size_t c) {
+    const std::size_t end = std::min(count, (c + 1) * kChunk);
+    for (std::size_t p = c * kChunk; p < end; ++p) fn(p);
+  });
+}
+
 }  // namespace
 
 struct PeriodicMesh::Fft {
@@ -99,28 +125,16 @@ void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const doubl
   fixed_unit_ = std::ldexp(m_min, -bits);
   const double unit_inv = 1.0 / fixed_unit_;
   const double cell_inv = n_ / box_;
-  constexpr std::size_t kChunk = 4096;
-  const std::size_t chunks = (positions.size() + kChunk - 1) / kChunk;
-  for_each_or_serial(for_each, chunks, [&](std::size_t c) {
-    const std::size_t end = std::min(positions.size(), (c + 1) * kChunk);
-    for (std::size_t p = c * kChunk; p < end; ++p) {
-      const Vec3& x = positions[p];
-      if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
-        throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
-      AxisWeights w[3]{};
-      for (int d = 0; d < 3; ++d) w[d] = axis_weights(x[d] - box_ * std::floor(x[d] / box_), cell_inv, n_);
-      const double m = masses[p] * unit_inv;
-      for (int corner = 0; corner < 8; ++corner) {
-        const int i = (corner & 1) ? (w[0].lo + 1) % n_ : w[0].lo;
-        const int j = (corner & 2) ? (w[1].lo + 1) % n_ : w[1].lo;
-        const int k = (corner & 4) ? (w[2].lo + 1) % n_ : w[2].lo;
-        const double weight = ((corner & 1) ? w[0].w_hi : w[0].w_lo) * ((corner & 2) ? w[1].w_hi : w[1].w_lo) *
-                              ((corner & 4) ? w[2].w_hi : w[2].w_lo);
-        const auto add = static_cast<std::int64_t>(std::llround(m * weight));
-        const std::size_t node = (static_cast<std::size_t>(i) * n_ + j) * n_ + k;
-        std::atomic_ref<std::int64_t>(fixed_[node]).fetch_add(add, std::memory_order_relaxed);
-      }
-    }
+  for_each_particle(for_each, positions.size(), [&](std::size_t p) {
+    const Vec3& x = positions[p];
+    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+      throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
+    const double m = masses[p] * unit_inv;
+    for_each_cloud_node(x, box_, cell_inv, n_, [&](int i, int j, int k, double weight) {
+      const auto add = static_cast<std::int64_t>(std::llround(m * weight));
+      const std::size_t node = (static_cast<std::size_t>(i) * n_ + j) * n_ + k;
+      std::atomic_ref<std::int64_t>(fixed_[node]).fetch_add(add, std::memory_order_relaxed);
+    });
   });
 }
 
@@ -195,28 +209,15 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
     };
     return (8.0 * (at(1) - at(-1)) - (at(2) - at(-2))) * (cell_inv / 12.0);
   };
-  constexpr std::size_t kChunk = 4096;
-  const std::size_t chunks = (count + kChunk - 1) / kChunk;
-  for_each_or_serial(for_each, chunks, [&](std::size_t c) {
-    const std::size_t end = std::min(count, (c + 1) * kChunk);
-    for (std::size_t p = c * kChunk; p < end; ++p) {
-      const Vec3& x = positions[p];
-      AxisWeights w[3]{};
-      for (int d = 0; d < 3; ++d) w[d] = axis_weights(x[d] - box_ * std::floor(x[d] / box_), cell_inv, n);
-      Vec3 acc;
-      double pot = 0.0;
-      for (int corner = 0; corner < 8; ++corner) {
-        const int i = (corner & 1) ? (w[0].lo + 1) % n : w[0].lo;
-        const int j = (corner & 2) ? (w[1].lo + 1) % n : w[1].lo;
-        const int k = (corner & 4) ? (w[2].lo + 1) % n : w[2].lo;
-        const double weight = ((corner & 1) ? w[0].w_hi : w[0].w_lo) * ((corner & 2) ? w[1].w_hi : w[1].w_lo) *
-                              ((corner & 4) ? w[2].w_hi : w[2].w_lo);
-        for (int d = 0; d < 3; ++d) acc[d] -= weight * gradient(i, j, k, d);
-        pot += weight * phi[real_index(i, j, k)];
-      }
-      acceleration[p] = acc;
-      potential[p] = pot + background + self * masses[p];
-    }
+  for_each_particle(for_each, count, [&](std::size_t p) {
+    Vec3 acc;
+    double pot = 0.0;
+    for_each_cloud_node(positions[p], box_, cell_inv, n, [&](int i, int j, int k, double weight) {
+      for (int d = 0; d < 3; ++d) acc[d] -= weight * gradient(i, j, k, d);
+      pot += weight * phi[real_index(i, j, k)];
+    });
+    acceleration[p] = acc;
+    potential[p] = pot + background + self * masses[p];
   });
 }
 

@@ -73,6 +73,10 @@ struct StepContext {
   double dt_rms_dark_matter = std::numeric_limits<double>::infinity();
   // Sets ti_current and the expansion there.
   void set_time(IntegerTime ti);
+  // x += v_full * drift_factor over [t0, t1]: the interval itself, or comoving, int dt / a^2.
+  double drift_factor(IntegerTime t0, IntegerTime t1) const {
+    return comoving ? comoving->drift(static_cast<double>(t0), static_cast<double>(t1)) : timeline.drift_factor(t0, t1);
+  }
 
   // A parallel loop for use inside a task (Executor::for_each_in_task), empty on one thread:
   // a task whose work splits (a cell's gravity walk) lets idle threads help, so that a big

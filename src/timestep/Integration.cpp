@@ -115,8 +115,7 @@ std::string tick_text(const TimeLine& t) {
 void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
-  const double dt = ctx.comoving ? ctx.comoving->drift(static_cast<double>(cell.ti_drift), static_cast<double>(ctx.ti_current))
-                                 : ctx.timeline.drift_factor(cell.ti_drift, ctx.ti_current);
+  const double dt = ctx.drift_factor(cell.ti_drift, ctx.ti_current);
   // The predicted velocities and energies over the drift (comoving: each with its own factor).
   const KickFactors k = ctx.comoving ? comoving_kick(ctx, static_cast<double>(cell.ti_drift), static_cast<double>(ctx.ti_current))
                                      : KickFactors{dt, dt, dt};
