@@ -576,18 +576,17 @@ void write_file_atomically(const std::string& path, const std::string& what,
   }
 }
 
-void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time,
-                         std::uint64_t n_dm, std::uint64_t n_stars) {
+void write_gadget_header(File& file, const std::array<std::uint64_t, 6>& counts, const std::vector<double>& box_size,
+                         double time, const cosmology::CosmologyParams* cosmology) {
   file.create_group("/Header");
   const std::string h = "/Header";
   constexpr std::uint64_t two32 = std::uint64_t{1} << 32;
-  const std::uint64_t counts[6] = {n_gas, n_dm, 0, 0, n_stars, 0};
-  if (n_gas < two32 && n_dm < two32 && n_stars < two32) {
+  if (*std::max_element(counts.begin(), counts.end()) < two32) {
     std::vector<std::uint32_t> c(6);
     for (int t = 0; t < 6; ++t) c[static_cast<std::size_t>(t)] = static_cast<std::uint32_t>(counts[t]);
     file.write_attribute(h, "NumPart_ThisFile", c);
   } else {
-    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>(counts, counts + 6));
+    file.write_attribute(h, "NumPart_ThisFile", std::vector<std::uint64_t>(counts.begin(), counts.end()));
   }
   std::vector<std::uint32_t> low(6, 0), high(6, 0);
   for (int t = 0; t < 6; ++t) {
@@ -598,7 +597,7 @@ void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<doub
   file.write_attribute(h, "NumPart_Total_HighWord", high);
   file.write_attribute(h, "MassTable", std::vector<double>(6, 0.0));
   file.write_attribute(h, "Time", time);
-  file.write_attribute(h, "Redshift", 0.0);
+  file.write_attribute(h, "Redshift", cosmology != nullptr ? 1.0 / time - 1.0 : 0.0);
   if (box_size.size() == 1) {
     file.write_attribute(h, "BoxSize", box_size[0]);
   } else {
@@ -606,9 +605,10 @@ void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<doub
   }
   file.write_attribute(h, "NumFilesPerSnapshot", 1);
   file.write_attribute(h, "Dimension", 3);
-  file.write_attribute(h, "Omega0", 0.0);
-  file.write_attribute(h, "OmegaLambda", 0.0);
-  file.write_attribute(h, "HubbleParam", 1.0);
+  file.write_attribute(h, "Omega0", cosmology != nullptr ? cosmology->omega_m : 0.0);
+  file.write_attribute(h, "OmegaLambda", cosmology != nullptr ? cosmology->omega_lambda : 0.0);
+  file.write_attribute(h, "HubbleParam", cosmology != nullptr ? cosmology->hubble_param : 1.0);
+  if (cosmology != nullptr) file.write_attribute(h, "OmegaBaryon", cosmology->omega_b);
   for (const char* flag : {"Flag_Sfr", "Flag_Cooling", "Flag_Feedback", "Flag_StellarAge", "Flag_Metals",
                            "Flag_Entropy_ICs"})
     file.write_attribute(h, flag, 0);

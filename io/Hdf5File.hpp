@@ -3,6 +3,7 @@
 #pragma once
 #include <hdf5.h>
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "core/Vec3.hpp"
+#include "cosmology/Background.hpp"
 
 namespace fountain::io::hdf5 {
 
@@ -169,13 +171,15 @@ class File {
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<void(File&)>& fill);
 
-// Writes the GADGET-2 style /Header group for `n_gas` gas particles (type 0), `n_dm` dark
-// matter particles (type 1) and no other types: NumPart_ThisFile (uint32[6], uint64[6] if a
-// count is >= 2^32), NumPart_Total (uint32[6], low words) with NumPart_Total_HighWord
-// (uint32[6]), MassTable (zeros: masses go in the Masses datasets), Time, Redshift = 0, BoxSize (`box_size`: 1 or 3 values),
-// NumFilesPerSnapshot = 1, Dimension = 3, Omega0 = OmegaLambda = 0 and HubbleParam = 1
-// (non-cosmological), Flag_* = 0 except Flag_DoublePrecision = 1 (every dataset is float64).
-void write_gadget_header(File& file, std::uint64_t n_gas, const std::vector<double>& box_size, double time,
-                         std::uint64_t n_dm = 0, std::uint64_t n_stars = 0);
+// Writes the GADGET-2 style /Header group for `counts[t]` particles of each type t:
+// NumPart_ThisFile (uint32[6], uint64[6] if a count is >= 2^32), NumPart_Total (uint32[6], low
+// words) with NumPart_Total_HighWord (uint32[6]), MassTable (zeros: masses go in the Masses
+// datasets), Time, BoxSize (`box_size`: 1 or 3 values), NumFilesPerSnapshot = 1, Dimension = 3,
+// Flag_* = 0 except Flag_DoublePrecision = 1 (every dataset is float64). Without `cosmology`:
+// Redshift = 0, Omega0 = OmegaLambda = 0 and HubbleParam = 1 (GADGET's non-cosmological
+// header); with it, `time` is the scale factor and Redshift, Omega0, OmegaLambda, OmegaBaryon
+// and HubbleParam are the run's.
+void write_gadget_header(File& file, const std::array<std::uint64_t, 6>& counts, const std::vector<double>& box_size,
+                         double time, const cosmology::CosmologyParams* cosmology = nullptr);
 
 }  // namespace fountain::io::hdf5

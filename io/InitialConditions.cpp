@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/Error.hpp"
+#include "io/GadgetBinary.hpp"
 #include "io/Hdf5File.hpp"
 
 namespace fountain::io {
@@ -34,6 +35,9 @@ struct Species {
 };
 constexpr Species kGasSpecies{0, kGas, "gas"};
 constexpr Species kDarkMatterSpecies{1, kDarkMatter, "dark matter"};
+constexpr Species kType2{2, "/PartType2", "low-resolution dark matter (type 2)"};
+constexpr Species kType3{3, "/PartType3", "low-resolution dark matter (type 3)"};
+constexpr Species kType5{5, "/PartType5", "low-resolution dark matter (type 5)"};
 
 // Checks that `dataset` has n rows (and 3 columns when `vector` is set) before reading it.
 void check_shape(const File& file, const Species& sp, const std::string& dataset, std::uint64_t n, bool vector) {
@@ -134,21 +138,21 @@ std::uint64_t particle_count(const File& file, const std::vector<std::uint64_t>&
   return n;
 }
 
-// Reads the dark matter of /PartType1 (empty when NumPart_ThisFile[1] is 0).
-CollisionlessParticles read_dark_matter(const File& file, std::uint64_t n, const std::vector<double>* mass_table) {
-  const Species& sp = kDarkMatterSpecies;
+// Reads the collisionless particles of one GADGET type (none when NumPart_ThisFile says 0).
+CollisionlessParticles read_collisionless(const File& file, const Species& sp, std::uint64_t n,
+                                          const std::vector<double>* mass_table, fountain::Species species) {
   CollisionlessParticles dm;
   if (n == 0) return dm;
   if (!file.exists(sp.group))
-    file.fail(sp.group, fmt::format("group not found, but /Header/NumPart_ThisFile[1] announces {} dark matter "
-                                    "particles",
-                                    n));
+    file.fail(sp.group, fmt::format("group not found, but /Header/NumPart_ThisFile[{}] announces {} {} particles",
+                                    sp.type, n, sp.noun));
   const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
   const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
   const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
   const std::vector<double> mass = read_masses(file, sp, n, ids, mass_table);
   dm.resize(n);  // a_grav, potential, time_bin and ti_begin start at zero
   dm.id = ids;
+  dm.species.assign(n, species);
   dm.mass = mass;
   dm.x = x;
   dm.v_full = v;
@@ -156,28 +160,157 @@ CollisionlessParticles read_dark_matter(const File& file, std::uint64_t n, const
   return dm;
 }
 
-// IDs must be unique across the types: names the first dark matter particle whose ID a gas
-// particle also uses.
-void check_ids_across_species(const File& file, const GasParticles& gas, const CollisionlessParticles& dm) {
+void append(CollisionlessParticles& to, const CollisionlessParticles& from) {
+  const std::size_t n = to.size();
+  to.resize(n + from.size());
+  for (std::size_t i = 0; i < from.size(); ++i) {
+    to.id[n + i] = from.id[i];
+    to.species[n + i] = from.species[i];
+    to.mass[n + i] = from.mass[i];
+    to.x[n + i] = from.x[i];
+    to.v_full[n + i] = from.v_full[i];
+    to.v[n + i] = from.v[i];
+  }
+}
+
+// IDs must be unique across the types: names the first collisionless particle whose ID a gas
+// particle or an earlier collisionless particle also uses. `ids_of(species)` names where the
+// file holds that species' IDs.
+template <class IdsOf>
+void check_ids_across_species(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
+                              IdsOf&& ids_of) {
   if (dm.size() == 0) return;
   std::vector<std::uint64_t> gas_ids(gas.id);
   std::sort(gas_ids.begin(), gas_ids.end());
   for (std::size_t i = 0; i < dm.size(); ++i)
     if (std::binary_search(gas_ids.begin(), gas_ids.end(), dm.id[i]))
-      file.fail(kDarkMatterSpecies.dataset("ParticleIDs"),
-                fmt::format("particle ID {} (entry {}) is also used by a gas particle in {}; IDs must be unique "
-                            "across gas and dark matter",
-                            dm.id[i], i, kGasSpecies.dataset("ParticleIDs")));
+      throw InputError(fmt::format("{}: {}: particle ID {} ({}) is also used by a gas particle; IDs must be unique "
+                                   "across gas and dark matter",
+                                   path, ids_of(dm.species[i]), dm.id[i], species_name(dm.species[i])));
+  std::vector<std::size_t> order(dm.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return dm.id[a] != dm.id[b] ? dm.id[a] < dm.id[b] : a < b; });
+  for (std::size_t k = 1; k < order.size(); ++k)
+    if (dm.id[order[k]] == dm.id[order[k - 1]])
+      throw InputError(fmt::format("{}: {}: particle ID {} is used by both a {} and a {} particle; IDs must be "
+                                   "unique across the particle types",
+                                   path, ids_of(dm.species[order[k]]), dm.id[order[k]],
+                                   species_name(dm.species[order[k - 1]]), species_name(dm.species[order[k]])));
+}
+
+// The header's cosmology and the /Units group's unit system, where the file gives them.
+void read_file_cosmology(const File& file, InitialConditions& ic) {
+  auto scalar = [&](const char* object, const char* name, double& out) {
+    if (!file.has_attribute(object, name)) return false;
+    const std::vector<double> v = file.read_attribute_doubles(object, name);
+    if (v.empty() || !std::isfinite(v[0]))
+      file.fail(std::string(object) + "/" + name, "is empty or not finite");
+    out = v[0];
+    return true;
+  };
+  IcFileCosmology& c = ic.cosmology;
+  c.present = scalar(kHeader, "Omega0", c.omega0) & scalar(kHeader, "OmegaLambda", c.omega_lambda) &
+              scalar(kHeader, "HubbleParam", c.hubble_param);
+  scalar(kHeader, "Redshift", c.redshift);
+  if (file.exists("/Units")) {
+    scalar("/Units", "UnitLength_in_cm", ic.units.length_cgs);
+    scalar("/Units", "UnitMass_in_g", ic.units.mass_cgs);
+    scalar("/Units", "UnitVelocity_in_cm_per_s", ic.units.velocity_cgs);
+  }
+}
+
+// Positive, finite internal energies, or (cosmological files) none at all: 0 is "not given".
+void check_internal_energies(const std::string& where, const std::vector<std::uint64_t>& ids,
+                             const std::vector<double>& u, bool cosmological, bool& given) {
+  given = !u.empty();
+  for (std::size_t i = 0; i < u.size(); ++i) {
+    if (cosmological && u[i] == 0.0) {
+      given = false;
+      continue;
+    }
+    if (!std::isfinite(u[i]) || u[i] <= 0.0)
+      throw InputError(fmt::format("{}: particle ID {} has internal energy {} (must be positive and finite)", where,
+                                   ids[i], u[i]));
+  }
+  if (cosmological && !given)
+    for (double v : u)
+      if (v != 0.0)
+        throw InputError(fmt::format("{}: some gas particles have an internal energy and some have 0; give all or "
+                                     "none",
+                                     where));
+}
+
+// A GADGET binary file (format 1 or 2) as initial conditions.
+InitialConditions read_gadget_binary_ics(const std::string& path, const IcReadOptions& options) {
+  const GadgetSnapshot snap = read_gadget_binary(path);
+  const GadgetHeader& h = snap.header;
+  InitialConditions ic;
+  ic.format = "GADGET binary";
+  ic.box_size = {h.box_size, h.box_size, h.box_size};
+  ic.time = h.time;
+  ic.cosmology = {true, h.omega0, h.omega_lambda, h.hubble_param, h.redshift};
+  if (h.flag_entropy_ics != 0)
+    throw InputError(fmt::format("{}: flag_entropy_instead_u is set: the U block holds entropy, which is not "
+                                 "supported; write the specific internal energy instead",
+                                 path));
+  const GadgetParticles& g = snap.types[0];
+  const std::size_t n = g.id.size();
+  if (n == 0 && !options.cosmological)
+    throw InputError(fmt::format("{}: has no gas particles (type 0); Fountain needs gas particles", path));
+  for (int t : {1, 4})
+    if (!snap.types[static_cast<std::size_t>(t)].id.empty() && t == 4)
+      throw InputError(fmt::format("{}: holds star particles (type 4), which initial conditions cannot have", path));
+  std::vector<double> u = g.u;
+  if (u.empty() && !options.cosmological)
+    throw InputError(fmt::format("{}: has no U block (the gas needs a specific internal energy)", path));
+  check_internal_energies(path + " (block U)", g.id, u, options.cosmological, ic.has_internal_energy);
+  if (!ic.has_internal_energy) u.assign(n, 0.0);
+  GasParticles& gas = ic.gas;
+  gas.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    gas.id[i] = g.id[i];
+    gas.mass[i] = g.mass[i];
+    gas.x[i] = gas.x[i] = g.x[i];
+    gas.v_full[i] = gas.v[i] = g.v[i];
+    gas.u_full[i] = gas.u[i] = u[i];
+    gas.h[i] = 0.0;
+    gas.time_bin[i] = 0;
+  }
+  for (int t : {1, 2, 3, 5}) {
+    const GadgetParticles& p = snap.types[static_cast<std::size_t>(t)];
+    if (p.id.empty()) continue;
+    if (t != 1 && !options.cosmological)
+      throw InputError(fmt::format("{}: holds {} particles of type {}, which only comoving runs read", path,
+                                   p.id.size(), t));
+    CollisionlessParticles part;
+    part.resize(p.id.size());
+    part.id = p.id;
+    part.species.assign(p.id.size(), t == 1 ? fountain::Species::DarkMatter : fountain::Species::LowResDarkMatter);
+    part.mass = p.mass;
+    part.x = p.x;
+    part.v_full = part.v = p.v;
+    append(ic.dm, part);
+  }
+  if (ic.gas.size() + ic.dm.size() == 0) throw InputError(fmt::format("{}: holds no particles", path));
+  check_ids_across_species(path, ic.gas, ic.dm, [](fountain::Species) { return "block ID"; });
+  return ic;
 }
 
 }  // namespace
 
-InitialConditions read_initial_conditions(const std::string& path) {
+InitialConditions read_initial_conditions(const std::string& path, const IcReadOptions& options) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  // A GADGET binary set split over files is named without its ".0".
+  if (!fs::exists(path, ec) && fs::exists(path + ".0", ec) && is_gadget_binary(path))
+    return read_gadget_binary_ics(path, options);
   if (!fs::exists(path, ec)) throw InputError(path + ": initial conditions file not found");
   if (fs::is_directory(path, ec)) throw InputError(path + ": is a folder, not an HDF5 initial conditions file");
-  if (!hdf5::is_hdf5(path)) throw InputError(path + ": not an HDF5 file (expected GADGET-layout HDF5 initial conditions)");
+  if (!hdf5::is_hdf5(path)) {
+    if (is_gadget_binary(path)) return read_gadget_binary_ics(path, options);
+    throw InputError(path + ": not an HDF5 file, nor GADGET binary (expected GADGET-layout initial conditions)");
+  }
 
   const File file(path, File::Mode::read);
   if (!file.exists(kHeader)) file.fail(kHeader, "group not found (not a GADGET-layout HDF5 file?)");
@@ -196,7 +329,7 @@ InitialConditions read_initial_conditions(const std::string& path) {
   }
   const std::uint64_t n = particle_count(file, this_file, kGasSpecies);
   const std::uint64_t n_dm = particle_count(file, this_file, kDarkMatterSpecies);
-  if (n == 0)
+  if (n == 0 && !options.cosmological)
     file.fail("/Header/NumPart_ThisFile",
               n_dm == 0 ? std::string("has no gas particles (entry 0 is 0); Fountain needs gas particles in /PartType0")
                         : fmt::format("has no gas particles (entry 0 is 0, entry 1 announces {} dark matter "
@@ -212,6 +345,7 @@ InitialConditions read_initial_conditions(const std::string& path) {
   }
 
   InitialConditions ic;
+  read_file_cosmology(file, ic);
 
   if (!file.has_attribute(kHeader, "BoxSize")) file.fail(kHeader, "attribute BoxSize not found");
   const std::vector<double> box = file.read_attribute_doubles(kHeader, "BoxSize");
@@ -240,54 +374,67 @@ InitialConditions read_initial_conditions(const std::string& path) {
   const std::vector<double>* table = has_mass_table ? &mass_table : nullptr;
 
   // --- Gas particles ------------------------------------------------------------------
-  const Species& sp = kGasSpecies;
-  if (!file.exists(kGas))
-    file.fail(kGas, fmt::format("group not found, but /Header/NumPart_ThisFile[0] announces {} gas particles", n));
+  // (none in a cosmological run of dark matter alone)
+  if (n > 0) {
+    const Species& sp = kGasSpecies;
+    if (!file.exists(kGas))
+      file.fail(kGas, fmt::format("group not found, but /Header/NumPart_ThisFile[0] announces {} gas particles", n));
 
-  const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
-  const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
-  const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
-  const std::vector<double> mass = read_masses(file, sp, n, ids, table);
+    const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
+    const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
+    const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
+    const std::vector<double> mass = read_masses(file, sp, n, ids, table);
 
-  const std::string u_name = kGasSpecies.dataset("InternalEnergy");
-  if (!file.exists(u_name)) file.fail(u_name, "dataset not found (the gas needs a specific internal energy)");
-  const std::vector<double> u = read_scalars(file, sp, "InternalEnergy", n);
-  for (std::size_t i = 0; i < u.size(); ++i)
-    if (!std::isfinite(u[i]) || u[i] <= 0.0)
-      file.fail(u_name,
-                fmt::format("particle ID {} has internal energy {} (must be positive and finite)", ids[i], u[i]));
+    const std::string u_name = kGasSpecies.dataset("InternalEnergy");
+    std::vector<double> u;
+    if (file.exists(u_name)) {
+      u = read_scalars(file, sp, "InternalEnergy", n);
+    } else if (n > 0 && !options.cosmological) {
+      file.fail(u_name, "dataset not found (the gas needs a specific internal energy)");
+    }
+    check_internal_energies(path + ": " + u_name, ids, u, options.cosmological, ic.has_internal_energy);
+    if (!ic.has_internal_energy) u.assign(n, 0.0);
 
-  std::vector<double> h;
-  const std::string h_name = kGasSpecies.dataset("SmoothingLength");
-  ic.has_smoothing_length = file.exists(h_name);
-  if (ic.has_smoothing_length) {
-    h = read_scalars(file, sp, "SmoothingLength", n);
-    for (std::size_t i = 0; i < h.size(); ++i)
-      if (!std::isfinite(h[i]) || h[i] < 0.0)
-        file.fail(h_name, fmt::format("particle ID {} has smoothing length {} (must be finite and non-negative)",
-                                      ids[i], h[i]));
-  } else {
-    h.assign(n, 0.0);
-  }
+    std::vector<double> h;
+    const std::string h_name = kGasSpecies.dataset("SmoothingLength");
+    ic.has_smoothing_length = file.exists(h_name);
+    if (ic.has_smoothing_length) {
+      h = read_scalars(file, sp, "SmoothingLength", n);
+      for (std::size_t i = 0; i < h.size(); ++i)
+        if (!std::isfinite(h[i]) || h[i] < 0.0)
+          file.fail(h_name, fmt::format("particle ID {} has smoothing length {} (must be finite and non-negative)",
+                                        ids[i], h[i]));
+    } else {
+      h.assign(n, 0.0);
+    }
 
-  // --- Fill the particles ---------------------------------------------------------------
-  GasParticles& gas = ic.gas;
-  gas.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    gas.id[i] = ids[i];
-    gas.mass[i] = mass[i];
-    gas.x[i] = x[i];
-    gas.v_full[i] = v[i];
-    gas.v[i] = v[i];
-    gas.u_full[i] = u[i];
-    gas.u[i] = u[i];
-    gas.h[i] = h[i];
-    gas.time_bin[i] = 0;
+    // --- Fill the particles ---------------------------------------------------------------
+    GasParticles& gas = ic.gas;
+    gas.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      gas.id[i] = ids[i];
+      gas.mass[i] = mass[i];
+      gas.x[i] = x[i];
+      gas.v_full[i] = v[i];
+      gas.v[i] = v[i];
+      gas.u_full[i] = u[i];
+      gas.u[i] = u[i];
+      gas.h[i] = h[i];
+      gas.time_bin[i] = 0;
+    }
+
   }
 
   // --- Dark matter ----------------------------------------------------------------------
-  ic.dm = read_dark_matter(file, n_dm, table);
-  check_ids_across_species(file, ic.gas, ic.dm);
+  ic.dm = read_collisionless(file, kDarkMatterSpecies, n_dm, table, fountain::Species::DarkMatter);
+  if (options.cosmological)
+    for (const Species& low : {kType2, kType3, kType5})
+      append(ic.dm, read_collisionless(file, low, particle_count(file, this_file, low), table,
+                                       fountain::Species::LowResDarkMatter));
+  if (ic.gas.size() + ic.dm.size() == 0) file.fail("/Header/NumPart_ThisFile", "announces no particles");
+  check_ids_across_species(path, ic.gas, ic.dm, [](fountain::Species s) {
+    return s == fountain::Species::DarkMatter ? "/PartType1/ParticleIDs" : "/PartType2, 3 or 5/ParticleIDs";
+  });
   return ic;
 }
 
@@ -340,7 +487,7 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const Colli
   }
 
   hdf5::write_file_atomically(path, "initial conditions", [&](File& file) {
-    hdf5::write_gadget_header(file, n, {box_size.x, box_size.y, box_size.z}, time, n_dm);
+    hdf5::write_gadget_header(file, {n, n_dm, 0, 0, 0, 0}, {box_size.x, box_size.y, box_size.z}, time);
     // Not a GADGET field; records the boundary conditions the set-up was made for.
     file.write_attribute(kHeader, "Periodic", periodic ? 1 : 0);
     file.create_group(kGas);

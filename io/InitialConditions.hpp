@@ -8,15 +8,38 @@
 
 namespace fountain::io {
 
+// The units a file says it is in (HDF5 /Units, GADGET's names); 0 where it does not say.
+struct IcFileUnits {
+  double length_cgs = 0.0, mass_cgs = 0.0, velocity_cgs = 0.0;
+};
+
+// The cosmology a file's /Header gives (GADGET's Omega0, OmegaLambda, HubbleParam, Redshift).
+struct IcFileCosmology {
+  bool present = false;  // the header has all three parameters
+  double omega0 = 0.0, omega_lambda = 0.0, hubble_param = 0.0, redshift = 0.0;
+};
+
 struct InitialConditions {
   GasParticles gas;          // id, mass, x, v_full (= v), u_full (= u), h (0 where absent)
-  CollisionlessParticles dm;    // id, mass, x, v_full (empty when the file has none)
+  CollisionlessParticles dm;    // id, species, mass, x, v_full (empty when the file has none)
   Vec3 box_size;             // /Header/BoxSize (scalar or 3-vector in the file)
   double time = 0.0;         // /Header/Time
   bool has_smoothing_length = false;
+  bool has_internal_energy = true;  // false: the file gave none (or zeros), for the run to set
+  IcFileUnits units;
+  IcFileCosmology cosmology;
+  std::string format = "GADGET HDF5";  // or "GADGET binary format 1" / "... format 2"
 };
 
-// Reads /Header, /PartType0 (Coordinates, Velocities, ParticleIDs, Masses or the
+struct IcReadOptions {
+  // A cosmological run's initial conditions: dark matter alone is allowed, a gas particle's
+  // internal energy may be missing or 0 (the run sets it), and the low-resolution dark matter
+  // of types 2, 3 and 5 is read (as Species::LowResDarkMatter, masses per particle).
+  bool cosmological = false;
+};
+
+// Reads GADGET-layout HDF5 or GADGET binary (format 1 or 2, one file or path.0 .. path.(n-1),
+// detected from the first bytes), with no conversion of units or conventions. HDF5: reads /Header, /PartType0 (Coordinates, Velocities, ParticleIDs, Masses or the
 // MassTable[0], InternalEnergy, optional SmoothingLength) and, when NumPart_ThisFile[1] > 0,
 // /PartType1 (Coordinates, Velocities, ParticleIDs, Masses or the MassTable[1]); other
 // particle types are ignored. Any problem -- missing or truncated file, missing group or
@@ -24,7 +47,7 @@ struct InitialConditions {
 // matter alone is refused), NaN/inf or non-positive mass or energy, an ID used twice within
 // a type or by both gas and dark matter -- throws InputError naming the file, the dataset
 // and (for bad values) the particle ID.
-InitialConditions read_initial_conditions(const std::string& path);
+InitialConditions read_initial_conditions(const std::string& path, const IcReadOptions& options = {});
 
 // Writes gas initial conditions in the same layout (used by `fountain ic`).
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const Vec3& box_size,

@@ -160,24 +160,66 @@ std::string exponent_term(const char* symbol, double e) {
   return fmt::format(" {}^{}", symbol, e);
 }
 
-void write_dataset_units(File& file, const std::string& dataset, const Units& units, const Dimensions& d,
-                         double gamma, const std::string& description) {
+// How a comoving run's snapshot stores a field held in code variables: stored = held x a^power,
+// and the stored values times a^a_exponent are physical. Velocities are stored as GADGET's
+// v_pec / sqrt(a) (held: v' = a v_pec), internal energies physical (held: u' = a^2 u, gamma =
+// 5/3), accelerations as held (the gravitational g = A'/a^2); other fields as held, with
+// SWIFT's exponents.
+struct ComovingStorage {
+  double power = 0.0;
+  double a_exponent = 0.0;
+};
+ComovingStorage comoving_storage(const std::string& name, const Dimensions& d, double gamma) {
+  if (name == "Velocities") return {-1.5, 0.5};
+  if (name == "InternalEnergy") return {-3.0 * (gamma - 1.0), 0.0};
+  if (name == "GravAcceleration") return {0.0, -2.0};
+  return {0.0, a_power(d, gamma)};
+}
+
+void write_dataset_units(File& file, const std::string& dataset, const SnapshotInfo& info, const Dimensions& d,
+                         const std::string& description) {
+  const Units& units = info.units;
   const double factor = std::pow(units.mass_cgs, d.mass) * std::pow(units.length_cgs, d.length) *
                         std::pow(units.time_cgs(), d.time);
+  const std::string name = dataset.substr(dataset.rfind('/') + 1);
+  // h-scaled units (comoving runs): lengths, masses and times are per h.
+  const double h_exponent = info.cosmology ? -(d.mass + d.length + d.time) : 0.0;
+  const double a_exponent =
+      info.cosmology ? comoving_storage(name, d, info.gamma).a_exponent : a_power(d, info.gamma);
+  // Non-cosmological runs: a = h = 1, so the physical factor is the same.
+  const double physical = info.cosmology ? factor * std::pow(info.time, a_exponent) *
+                                               std::pow(info.cosmology->hubble_param, h_exponent)
+                                         : factor;
   auto one = [](double v) { return std::vector<double>{v}; };
   file.write_attribute(dataset, "U_M exponent", one(d.mass));
   file.write_attribute(dataset, "U_L exponent", one(d.length));
   file.write_attribute(dataset, "U_t exponent", one(d.time));
   file.write_attribute(dataset, "U_I exponent", one(0.0));
   file.write_attribute(dataset, "U_T exponent", one(0.0));
-  file.write_attribute(dataset, "h-scale exponent", one(0.0));
-  file.write_attribute(dataset, "a-scale exponent", one(a_power(d, gamma)));
+  file.write_attribute(dataset, "h-scale exponent", one(h_exponent));
+  file.write_attribute(dataset, "a-scale exponent", one(a_exponent));
   file.write_attribute(dataset, "Conversion factor to CGS (not including cosmological corrections)", one(factor));
-  // Non-cosmological runs: a = 1, so the physical factor is the same.
   file.write_attribute(dataset, "Conversion factor to physical CGS (including cosmological corrections)",
-                       one(factor));
+                       one(physical));
   file.write_attribute(dataset, "Expression for physical CGS units", unit_expression(d));
   file.write_attribute(dataset, "Description", description);
+  // GADGET-4's names for the same: physical cgs = stored a^a_scaling h^h_scaling to_cgs.
+  file.write_attribute(dataset, "a_scaling", a_exponent);
+  file.write_attribute(dataset, "h_scaling", h_exponent);
+  file.write_attribute(dataset, "to_cgs", factor);
+}
+
+// Values of a field as a comoving run's snapshot stores them (see ComovingStorage).
+template <class Values>
+Values stored_values(const Values& held, const std::string& name, const Dimensions& d, const SnapshotInfo& info) {
+  if (!info.cosmology) return held;
+  const double power = comoving_storage(name, d, info.gamma).power;
+  if (power == 0.0) return held;
+  const double scale = std::pow(info.time, power);
+  Values out(held);
+  if constexpr (std::is_same_v<Values, std::vector<Vec3>> || std::is_same_v<Values, std::vector<double>>)
+    for (auto& v : out) v = v * scale;
+  return out;
 }
 
 // Whether a field flagged `when` goes into a snapshot's group (of stars, or not).
@@ -223,17 +265,19 @@ void write_fields(File& file, const std::string& group, const Store& p, const st
     }
     const Values& out = pick != nullptr ? picked : values;
     const std::string dataset = group + "/" + field.name;
-    // Positions are the one field a snapshot writes otherwise than it is held.
+    // Positions are folded into the box; a comoving run's velocities and energies converted.
     if constexpr (std::is_same_v<Values, std::vector<Vec3>>) {
       if (&values == &p.x) {
         write_field(file, dataset, positions_in_box(out, info));
       } else {
-        write_field(file, dataset, out);
+        write_field(file, dataset, stored_values(out, field.name, field.units, info));
       }
+    } else if constexpr (std::is_same_v<Values, std::vector<double>>) {
+      write_field(file, dataset, stored_values(out, field.name, field.units, info));
     } else {
       write_field(file, dataset, out);
     }
-    write_dataset_units(file, dataset, info.units, field.units, info.gamma, field.description);
+    write_dataset_units(file, dataset, info, field.units, field.description);
   });
 }
 
@@ -251,6 +295,7 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
                          const SnapshotInfo& info) {
   const std::size_t n = gas.size();
   const std::size_t n_dm = dm != nullptr ? dm->count(Species::DarkMatter) : 0;
+  const std::size_t n_low = dm != nullptr ? dm->count(Species::LowResDarkMatter) : 0;
   const std::size_t n_stars = dm != nullptr ? dm->count(Species::Star) : 0;
   try {
     check_sizes(gas, info, false, "gas");
@@ -270,8 +315,22 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     const bool cubic = b.x == b.y && b.y == b.z;
 
     // /Header
-    hdf5::write_gadget_header(file, n, cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z},
-                              info.time, n_dm, n_stars);
+    hdf5::write_gadget_header(file, {n, n_dm, n_low, 0, n_stars, 0},
+                              cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z}, info.time,
+                              info.cosmology ? &*info.cosmology : nullptr);
+    if (info.cosmology) {
+      // SWIFT's /Cosmology group.
+      const cosmology::CosmologyParams& c = *info.cosmology;
+      file.create_group("/Cosmology");
+      file.write_attribute("/Cosmology", "Cosmological run", 1);
+      file.write_attribute("/Cosmology", "Scale-factor", info.time);
+      file.write_attribute("/Cosmology", "Redshift", 1.0 / info.time - 1.0);
+      file.write_attribute("/Cosmology", "Omega_m", c.omega_m);
+      file.write_attribute("/Cosmology", "Omega_lambda", c.omega_lambda);
+      file.write_attribute("/Cosmology", "Omega_b", c.omega_b);
+      file.write_attribute("/Cosmology", "Omega_k", c.omega_k());
+      file.write_attribute("/Cosmology", "h", c.hubble_param);
+    }
     file.write_attribute("/Header", "Code", "Fountain");
     file.write_attribute("/Header", "Periodic", info.periodic ? 1 : 0);
     file.write_attribute("/Header", "Step", static_cast<std::int64_t>(info.step));
@@ -309,18 +368,21 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
     std::vector<double> pressure(n);
     for (std::size_t i = 0; i < n; ++i) pressure[i] = gm1 * gas.rho[i] * gas.u[i];
     file.write_dataset(ds(kPressureDataset.name), pressure);
-    write_dataset_units(file, ds(kPressureDataset.name), units, kPressureDataset.units, info.gamma,
+    write_dataset_units(file, ds(kPressureDataset.name), info, kPressureDataset.units,
                         fmt::format("{} with gamma = {}", kPressureDataset.description, info.gamma));
     if (info.temperature) {
+      // Of the physical u (a comoving run holds u' = a^(3 (gamma - 1)) u).
+      const double to_physical = info.cosmology ? std::pow(info.time, -3.0 * gm1) : 1.0;
       std::vector<double> temperature(gas.size());
-      for (std::size_t i = 0; i < gas.size(); ++i) temperature[i] = info.temperature(gas.u[i]);
+      for (std::size_t i = 0; i < gas.size(); ++i) temperature[i] = info.temperature(gas.u[i] * to_physical);
       file.write_dataset(ds(kTemperatureDataset.name), temperature);
-      write_dataset_units(file, ds(kTemperatureDataset.name), units, kTemperatureDataset.units, info.gamma,
+      write_dataset_units(file, ds(kTemperatureDataset.name), info, kTemperatureDataset.units,
                           kTemperatureDataset.description);
     }
 
     // /PartType1 (dark matter) and /PartType4 (stars): MassTable stays 0, masses per particle.
     if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, info);
+    if (n_low > 0) write_collisionless(file, "/PartType2", *dm, Species::LowResDarkMatter, info);
     if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, info);
   });
 }

@@ -1,10 +1,12 @@
 // HDF5 snapshots in the GADGET/SWIFT layout, with units, the parameters used and the git revision.
 #pragma once
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
+#include "cosmology/Background.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/FieldInfo.hpp"
 #include "particles/GasParticles.hpp"
@@ -24,6 +26,10 @@ struct SnapshotInfo {
   // Temperature (K) of gas of specific energy u; when set, gas gets a Temperature dataset.
   std::function<double(double)> temperature;
   bool star_formation = false;  // write the hybrid gas fields (hidden stars, reservoir, promotion)
+  // A comoving run's: `time` is then the scale factor a, the particles hold comoving code
+  // variables, and the file is written as GADGET's cosmological snapshots are (velocities
+  // v_pec / sqrt(a), physical internal energies, the cosmology in /Header and /Cosmology).
+  std::optional<cosmology::CosmologyParams> cosmology;
 };
 
 // The datasets of each PartType group are the fields the table of particle fields

@@ -9,6 +9,9 @@ comment at the top of io/Snapshot.cpp for why not the SWIFT one). That frontend 
 scripts/fountain_yt.py (units as unit_base, a non-cubic box as bounding_box).
 Prints OK and exits 0 when the total gas mass -- and, for a snapshot with /PartType1, the
 total dark matter mass -- agree to 1e-10 (relative), else prints the difference and exits 1.
+A comoving run's snapshot (OmegaLambda != 0 in /Header) must open as a cosmological data set
+at the header's redshift and Hubble parameter; its masses are then in h-scaled units (Msun/h),
+so h5py's sums are divided by h.
 """
 import logging
 import os
@@ -40,8 +43,12 @@ def main(argv):
             dm_masses = (
                 np.asarray(f["/PartType1/Masses"][...], dtype=np.float64) if "PartType1" in f else None
             )
+            header = dict(f["/Header"].attrs)
         extra = fountain_yt.load_arguments(path)
         mass_cgs = extra["unit_base"]["UnitMass_in_g"]
+        cosmological = float(header.get("OmegaLambda", 0.0)) != 0.0
+        if cosmological:
+            mass_cgs /= float(header["HubbleParam"])
     except Exception as e:  # noqa: BLE001 -- not a Fountain snapshot
         print(f"FAIL: h5py cannot read /PartType0/Masses and /Units from {path}: {type(e).__name__}: {e}")
         return 1
@@ -55,6 +62,19 @@ def main(argv):
         except Exception as e:  # noqa: BLE001 -- any failure to load is the answer
             print(f"FAIL: yt cannot load {path}: {type(e).__name__}: {e}")
             return 1
+        if cosmological:
+            problems = []
+            if not ds.cosmological_simulation:
+                problems.append("not opened as a cosmological simulation")
+            if abs(ds.current_redshift - float(header["Redshift"])) > 1e-9 * (1.0 + float(header["Redshift"])):
+                problems.append(f"redshift {ds.current_redshift}, header {header['Redshift']}")
+            if abs(ds.hubble_constant - float(header["HubbleParam"])) > 1e-12:
+                problems.append(f"hubble_constant {ds.hubble_constant}, header {header['HubbleParam']}")
+            if abs(ds.omega_matter - float(header["Omega0"])) > 1e-12:
+                problems.append(f"omega_matter {ds.omega_matter}, header {header['Omega0']}")
+            if problems:
+                print(f"FAIL ({type(ds).__name__}): " + "; ".join(problems))
+                return 1
         ad = ds.all_data()
         try:
             total = ad["gas", "mass"].sum()
@@ -91,7 +111,8 @@ def main(argv):
             )
             return 1
         dm_text = f"; {dm_masses.size} dark matter particles, total mass {dm_got_g:.12e} g"
-    print(f"OK ({frontend}: {masses.size} gas particles, total mass {got_g:.12e} g{dm_text})")
+    cosmo_text = f", cosmological at z = {float(header['Redshift']):.6g}" if cosmological else ""
+    print(f"OK ({frontend}{cosmo_text}: {masses.size} gas particles, total mass {got_g:.12e} g{dm_text})")
     return 0
 
 if __name__ == "__main__":

@@ -53,7 +53,7 @@ stop_half_way() {
   total=$1 half=$(($1 / 2)); shift
   "$@" --abandon-after-steps "$half" > runB.txt 2>&1 || { cat runB.txt; fail "run B"; }
   [ -f outB/restart.hdf5 ] || { cat runB.txt; fail "no restart file was written"; }
-  [ ! -f outB/snapshot_0001.hdf5 ] || fail "the run ended before it was stopped"
+  [ ! -f "outB/${last_snapshot:-snapshot_0001}.hdf5" ] || fail "the run ended before it was stopped"
   grep -q "^abandoned after step $half," runB.txt || { cat runB.txt; fail "run B did not stop at step $half"; }
   echo "stopped after $(grep -c '^step' runB.txt) of $total steps; $(grep 'restart file' runB.txt | tail -1)"
 }
@@ -242,6 +242,71 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     [ "$pieces" -eq 2 ] || { ls outB; fail "stale restart pieces left: $pieces" ; }
     # On 1 rank the run writes one whole file again, and the 3-rank copy's set was replaced.
     [ "$(ls outB1 | grep -c '_rank' || true)" -eq 0 ] || { ls outB1; fail "pieces left beside a 1-rank restart file"; } ;;
+  comoving_music_yt|comoving_music_bitwise|comoving_music_restart)
+    # A comoving run from another code's initial conditions: MUSIC's GADGET binary zoom (gas,
+    # high-resolution dark matter, and type-5 coarse particles, GADGET's
+    # velocity convention and 1e10 Msun/h mass unit) at z = 49, periodic TreePM, to a = 0.03
+    # with snapshots at the listed redshifts. _yt: yt opens the snapshots as a cosmological data
+    # set at their redshift with the header's cosmology and the gas and dark matter masses.
+    # _bitwise: 1 and 2 threads and 2 ranks give the same bits. _restart: a run stopped
+    # half-way and restarted ends as the uninterrupted one, bit for bit.
+    cp "$root/tests/data/music/zoom_gadget2.dat" music.dat
+    cparams() {  # cparams OUT_DIR [extra yaml]
+      cat > params.yml <<EOT
+initial_conditions:
+  file: music.dat
+  periodic: true
+cosmology:
+  enabled: true
+  omega_m: 0.3
+  omega_lambda: 0.7
+  omega_b: 0.03
+  hubble_param: 0.6
+  a_end: 0.03
+gravity:
+  enabled: true
+  softening_dark_matter: 0.05
+time_integration:
+  dt_max: 1
+output:
+  directory: $1
+  redshifts: [45, 40]
+${2:-}
+EOT
+    }
+    case $case_name in
+      comoving_music_yt)
+        cparams out
+        "$bin" run params.yml > run.txt 2>&1 || { cat run.txt; fail "comoving run failed"; }
+        grep -q "^snapshot out/snapshot_0001.hdf5 at a = 0.0217391 (z = 45)" run.txt || { cat run.txt; fail "no snapshot at z = 45"; }
+        grep -q "^done: .* steps to a = 0.03, 4 snapshots" run.txt || { tail -3 run.txt; fail "the run did not end at a = 0.03"; }
+        for k in 0 3; do "$python" "$root/tests/check_snapshot_yt.py" "out/snapshot_000$k.hdf5"; done
+        "$python" -c "
+import h5py, sys
+with h5py.File('out/snapshot_0003.hdf5', 'r') as f:
+    n = f['Header'].attrs['NumPart_ThisFile']
+    m = [f[f'PartType{t}/Masses'][:] for t in (0, 1, 2)]
+    # One coarse level below the fine one: each coarse particle is 8 fine cells' matter.
+    ratio = m[2].max() / (m[0].max() + m[1].max())
+    ok = n[0] > 0 and n[1] > 0 and n[2] > 0 and m[2].min() == m[2].max() and abs(ratio - 8) < 1e-6 and f['Header'].attrs['Time'] == 0.03
+    sys.exit(0 if ok else 1)" || fail "the snapshot lacks a particle type, the coarse masses or the time" ;;
+      comoving_music_bitwise)
+        cparams out1; "$bin" run params.yml -q -t 1 > run1.txt 2>&1 || { cat run1.txt; fail "1-thread run"; }
+        cparams out2; "$bin" run params.yml -q -t 2 > run2.txt 2>&1 || { cat run2.txt; fail "2-thread run"; }
+        cparams outr; ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params.yml -q -t 1 \
+          > runr.txt 2>&1 || { cat runr.txt; fail "2-rank run"; }
+        "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0003.hdf5 out2/snapshot_0003.hdf5
+        "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0003.hdf5 outr/snapshot_0003.hdf5 ;;
+      comoving_music_restart)
+        cparams outA; cp params.yml paramsA.yml
+        cparams outB "restart:
+  every_steps: 8"; cp params.yml paramsB.yml
+        "$bin" run paramsA.yml > runA.txt 2>&1 || { cat runA.txt; fail "uninterrupted run"; }
+        last_snapshot=snapshot_0003 stop_half_way "$(grep -c '^step' runA.txt)" "$bin" run paramsB.yml
+        "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
+        head -1 restart.txt
+        for k in 1 2 3; do "$python" "$root/tests/compare_snapshots.py" "outA/snapshot_000$k.hdf5" "outB/snapshot_000$k.hdf5"; done ;;
+    esac ;;
   snapshot_opens_in_yt)
     params good.hdf5 out
     "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }

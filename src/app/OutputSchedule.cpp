@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "app/Simulation.hpp"
 
 namespace fountain {
@@ -13,6 +15,13 @@ OutputSchedule::OutputSchedule(const RunConfig& config, const Engine& engine, in
 }
 
 IntegerTime OutputSchedule::ticks_of(int output) const {
+  if (config_.comoving.enabled) {
+    // The listed scale factors (output 1 is the first); the run's end has its own snapshot.
+    const std::vector<double>& a = config_.output.scale_factors;
+    if (output < 1 || static_cast<std::size_t>(output) > a.size()) return TimeLine::ticks;
+    const double a_out = a[static_cast<std::size_t>(output - 1)];
+    return a_out >= config_.comoving.a_end ? TimeLine::ticks : engine_.to_ticks(std::log(a_out));
+  }
   const double dt_out = config_.output.delta_time;
   if (dt_out <= 0.0) return TimeLine::ticks;
   const double t = config_.t_begin + output * dt_out;
@@ -40,16 +49,31 @@ SnapshotSeries::SnapshotSeries(const RunConfig& config, Engine& engine, Temperat
   info_.build_options = build_options();
   info_.temperature = std::move(temperature);
   info_.star_formation = config.star_formation.enabled;
+  if (config.comoving.enabled) info_.cosmology = config.comoving.cosmology;
 }
 
 void SnapshotSeries::write() {
   engine_.drift_all();
   info_.time = engine_.time();
+  // A comoving run's clock reads ln a; its snapshots give a (the first and last exactly as
+  // the parameters give them: exp(ln a) may differ from a in the last bit).
+  if (info_.cosmology) {
+    const IntegerTime ti = engine_.ti_current();
+    info_.time = ti == 0                 ? config_.comoving.a_begin
+                 : ti == TimeLine::ticks ? config_.comoving.a_end
+                                         : std::exp(info_.time);
+  }
   info_.step = engine_.steps();
   const std::string path =
       fmt::format("{}/{}_{:04d}.hdf5", config_.output.directory, config_.output.basename, written_);
   if (engine_.rank() == 0) io::write_snapshot(path, engine_.gas(), engine_.dark_matter(), info_);
-  if (!quiet_) fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info_.time);
+  if (!quiet_) {
+    if (info_.cosmology) {
+      fmt::print(stderr, "snapshot {} at a = {:.6g} (z = {:.6g})\n", path, info_.time, 1.0 / info_.time - 1.0);
+    } else {
+      fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info_.time);
+    }
+  }
   ++written_;
 }
 

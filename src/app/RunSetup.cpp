@@ -12,6 +12,7 @@
 
 #include <unistd.h>
 
+#include "app/ComovingStart.hpp"
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
 #include "core/PeriodicWrap.hpp"
@@ -145,10 +146,14 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     guard_output_folder(config.output.directory, config.output.basename, {ic_path, params.origin()}, options.restart,
                         options.overwrite);
   }
-  start.ic = io::read_initial_conditions(ic_path);
+  io::IcReadOptions read_options;
+  read_options.cosmological = config.comoving.enabled;
+  start.ic = io::read_initial_conditions(ic_path, read_options);
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.
-  if (!params.was_given("run.t_begin")) {
+  if (config.comoving.enabled) {
+    to_comoving_variables(ic, config, params, ic_path);
+  } else if (!params.was_given("run.t_begin")) {
     config.t_begin = ic.time;
     config.check_times(params, fmt::format("/Header/Time of {}", ic_path));
   } else if (ic.time != config.t_begin && options.rank == 0) {
@@ -161,10 +166,11 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     io::RestartState& state = start.restart;
     state = io::read_restart(restart_path(params));
     check_same_parameters(state, params, restart_path(params));
-    if (state.dm.count(Species::DarkMatter) != ic.dm.size())
+    const std::size_t state_dm = state.dm.size() - state.dm.count(Species::Star);
+    if (state_dm != ic.dm.size())
       throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "
                                    "have {}",
-                                   restart_path(params), state.dm.count(Species::DarkMatter), ic_path, ic.dm.size()));
+                                   restart_path(params), state_dm, ic_path, ic.dm.size()));
     ic.gas = std::move(state.gas);
     ic.dm = std::move(state.dm);
   }

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <string>
 #include <vector>
@@ -97,9 +98,15 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   while (!engine.finished()) {
     if (config.max_steps > 0 && engine.steps() >= config.max_steps) break;
     const StepInfo s = engine.step(outputs.next_ticks());
-    if (!quiet)
+    if (!quiet && config.comoving.enabled) {
+      // The clock reads ln a: the step's length is in ln a.
+      fmt::print(stderr, "step {:6d}  a = {:<12.6g} z = {:<10.5g} dln_a = {:<11.4g} active = {:<8d} {}wall = {:.3f} ms\n",
+                 s.step, std::exp(s.time), 1.0 / std::exp(s.time) - 1.0, s.dt, s.active, s.rebuilt ? "rebuilt " : "",
+                 1e3 * s.wall_s);
+    } else if (!quiet) {
       fmt::print(stderr, "step {:6d}  t = {:<12.6g} dt = {:<11.4g} active = {:<8d} {}wall = {:.3f} ms\n", s.step,
                  s.time, s.dt, s.active, s.rebuilt ? "rebuilt " : "", 1e3 * s.wall_s);
+    }
     if (dump_timeline && s.active > 0 && s.step % config.output.dump_timeline_every == 0)
       tasks::write_timeline_csv(engine.records_graph(), engine.task_types(), engine.last_records(),
                                 engine.rank(), s.step,
@@ -131,7 +138,8 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   if (!summary.terminated && !summary.abandoned) snapshots.write();
   summary.snapshots = snapshots.written();
   summary.steps = engine.steps();
-  summary.final_time = engine.time();
+  summary.comoving = config.comoving.enabled;
+  summary.final_time = summary.comoving ? std::exp(engine.time()) : engine.time();
   summary.ranks = engine.ranks();
   summary.partitions = engine.partitions();
   summary.bytes_sent = engine.bytes_sent();

@@ -16,6 +16,7 @@ struct RunSummary {
   int snapshots = 0;
   double wall_s = 0.0;
   double final_time = 0.0;
+  bool comoving = false;  // final_time is then the scale factor
   bool terminated = false;  // stopped by SIGTERM after writing a restart file
   bool abandoned = false;   // stopped at the step asked for, as a killed run would (nothing more written)
   // Across MPI ranks (1 when alone): how often cell owners were chosen, and what this rank sent.

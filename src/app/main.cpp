@@ -108,7 +108,8 @@ int main(int argc, char** argv) {
       if (s.terminated) return 75;
       if (s.abandoned) return 0;
       if (mpi.rank() == 0)
-        fmt::print(stderr, "done: {} steps to t = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.final_time,
+        fmt::print(stderr, "done: {} steps to {} = {:.6g}, {} snapshots, {:.2f} s\n", s.steps, s.comoving ? "a" : "t",
+                   s.final_time,
                  s.snapshots, s.wall_s);
       if (mpi.rank() == 0 && s.h_max_capped > 0)
         fmt::print(stderr, "warning: {} particle-steps were held at hydro.h_max with too few neighbours\n",

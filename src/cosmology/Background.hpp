@@ -17,6 +17,9 @@ struct CosmologyParams {
 // whatever h is.
 inline constexpr double kHubbleInternal = 100.0;
 
+// The CMB's temperature today (K), as Eisenstein & Hu's transfer function takes it.
+inline constexpr double kCmbTemperature = 2.728;
+
 struct SecondOrderGrowth {
   double d2 = 0.0;  // D2, -> -(3/7) a^2 as a -> 0
   double f2 = 0.0;  // dln D2 / dln a

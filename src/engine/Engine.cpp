@@ -95,13 +95,21 @@ void Engine::setup_comoving() {
   // The matter of the expanding background gravitates; and with gravity every rank keeps every
   // particle current, which the displacement limits below read.
   if (!config_.gravity.enabled) throw InputError("a comoving run needs gravity (gravity.enabled: true)");
-  background_ = std::make_unique<cosmology::Background>(c.cosmology);
+  if (!config_.space.periodic) throw InputError("a comoving run needs a periodic box (initial_conditions.periodic: true)");
+  // H0 = 100 km/s/Mpc in the run's units: exactly 100 in the default h-scaled units.
+  const double hubble0 = cosmology::kHubbleInternal * (config_.units.length_cgs / 3.0856775814913673e24) /
+                         (config_.units.velocity_cgs / 1e5);
+  background_ = std::make_unique<cosmology::Background>(c.cosmology, hubble0);
   expansion_factors_ = std::make_unique<cosmology::IntegrationFactors>(*background_, config_.hydro.gamma, c.a_begin, c.a_end);
   comoving_ = std::make_unique<ComovingTimeLine>(*expansion_factors_);
   timeline_.t_begin = std::log(c.a_begin);
   timeline_.t_end = std::log(c.a_end);
   ctx_->comoving = comoving_.get();
   ctx_->set_time(0);
+  if (comoving_->bin_for(config_.integration.dt_max, 0, config_.integration.max_dln_a) < 0)
+    throw InputError(fmt::format("time_integration.dt_max = {} is shorter than one tick of the timeline in ln a from "
+                                 "a = {} to {}; raise it or shorten the run",
+                                 config_.integration.dt_max, c.a_begin, c.a_end));
 }
 
 // The RMS-displacement limit of a comoving run (GADGET-2's MaxRMSDisplacementFac): per
@@ -638,6 +646,11 @@ void Engine::restore(IntegerTime ti_current, long long steps, IntegerTime ti_ste
   ti_step_begin_ = ti_step_begin;
   steps_ = steps;
   rebuild_now();
+  // The file written at the start holds the particles as initialise() left them: the tree
+  // their recut built was refit by its force passes, so the first step refits it too, rather
+  // than keeping it as if the recut had come at that step's start. (A file written at a later
+  // recut is restored to the very point it was written at, tree and all.)
+  if (steps == 0) ctx_->tree_current = false;
 }
 
 void Engine::wake_requested() {

@@ -2,6 +2,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
+#include <string_view>
+
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
 #include "step/TimeLine.hpp"
@@ -9,10 +13,75 @@
 
 namespace fountain {
 
+namespace {
+
+// The cosmology section and the keys that only comoving runs take, cross-checked.
+void read_comoving(const ParameterFile& p, RunConfig& c) {
+  ComovingConfig& cc = c.comoving;
+  cc.enabled = p.flag("cosmology.enabled");
+  constexpr const char* comoving_only[] = {
+      "cosmology.omega_m", "cosmology.omega_lambda", "cosmology.omega_b", "cosmology.hubble_param",
+      "cosmology.a_begin", "cosmology.a_end", "output.scale_factors", "output.redshifts",
+      "time_integration.max_dln_a", "initial_conditions.length_unit_cgs", "initial_conditions.mass_unit_cgs",
+      "initial_conditions.velocity_unit_cgs", "initial_conditions.velocity_convention",
+      "initial_conditions.h_scaled"};
+  if (!cc.enabled) {
+    for (const char* key : comoving_only)
+      if (p.was_given(key))
+        throw InputError(fmt::format("{} is for comoving runs; set cosmology.enabled: true or remove it", p.where(key)));
+    return;
+  }
+  for (const char* key : {"run.t_begin", "run.t_end", "output.delta_time"})
+    if (p.was_given(key))
+      throw InputError(fmt::format("{} is not used by a comoving run, whose clock is the scale factor: use {}", p.where(key),
+                                   std::string_view(key) == "output.delta_time"
+                                       ? "output.scale_factors or output.redshifts"
+                                       : "cosmology.a_begin and cosmology.a_end"));
+  cc.cosmology.omega_m = p.real("cosmology.omega_m");
+  cc.cosmology.omega_lambda = p.real("cosmology.omega_lambda");
+  cc.cosmology.omega_b = p.real("cosmology.omega_b");
+  cc.cosmology.hubble_param = p.real("cosmology.hubble_param");
+  if (cc.cosmology.omega_b > cc.cosmology.omega_m)
+    throw InputError(fmt::format("{} = {} exceeds cosmology.omega_m = {}", p.where("cosmology.omega_b"),
+                                 cc.cosmology.omega_b, cc.cosmology.omega_m));
+  cc.a_begin = p.real("cosmology.a_begin");
+  cc.a_end = p.real("cosmology.a_end");
+  if (!p.flag("initial_conditions.periodic"))
+    throw InputError(fmt::format("{}: a comoving run needs a periodic box (initial_conditions.periodic: true)",
+                                 p.where("initial_conditions.periodic")));
+  ComovingFileConventions& f = cc.files;
+  f.length_cgs = p.real("initial_conditions.length_unit_cgs");
+  f.mass_cgs = p.real("initial_conditions.mass_unit_cgs");
+  f.velocity_cgs = p.real("initial_conditions.velocity_unit_cgs");
+  f.gadget_velocities = p.text("initial_conditions.velocity_convention") == "gadget";
+  f.h_scaled = p.flag("initial_conditions.h_scaled");
+  c.integration.max_dln_a = p.real("time_integration.max_dln_a");
+  // The output times: the listed scale factors and redshifts, merged.
+  std::vector<double> a = p.reals("output.scale_factors");
+  for (std::size_t k = 1; k < a.size(); ++k)
+    if (!(a[k] > a[k - 1]))
+      throw InputError(fmt::format("{}: the scale factors must increase ({} follows {})", p.where("output.scale_factors"),
+                                   a[k], a[k - 1]));
+  const std::vector<double> z = p.reals("output.redshifts");
+  for (std::size_t k = 0; k < z.size(); ++k) {
+    if (k > 0 && !(z[k] < z[k - 1]))
+      throw InputError(fmt::format("{}: the redshifts must decrease ({} follows {})", p.where("output.redshifts"), z[k],
+                                   z[k - 1]));
+    a.push_back(1.0 / (1.0 + z[k]));
+  }
+  std::sort(a.begin(), a.end());
+  a.erase(std::unique(a.begin(), a.end()), a.end());
+  c.output.scale_factors = a;
+}
+
+}  // namespace
+
 RunConfig RunConfig::from(const ParameterFile& p) {
   RunConfig c;
+  read_comoving(p, c);
   c.t_begin = p.real("run.t_begin");
   c.t_end = p.real("run.t_end");
+  if (c.comoving.enabled) c.set_comoving_times();
   c.threads = static_cast<int>(p.integer("run.threads"));
   c.pin_threads = p.flag("run.pin_threads");
   c.max_steps = p.integer("run.max_steps");
@@ -50,7 +119,20 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   return c;
 }
 
+void RunConfig::set_comoving_times() {
+  // The engine's timeline runs in ln a; before a_begin is known (0: from the file) it is a
+  // placeholder that check_times does not judge.
+  t_begin = comoving.a_begin > 0.0 ? std::log(comoving.a_begin) : 0.0;
+  t_end = std::log(comoving.a_end);
+}
+
 void RunConfig::check_times(const ParameterFile& p, const std::string& start_origin) const {
+  if (comoving.enabled) {
+    if (comoving.a_begin > 0.0 && !(comoving.a_end > comoving.a_begin))
+      throw InputError(fmt::format("{} = {} must be later than the starting scale factor {} ({})",
+                                   p.where("cosmology.a_end"), comoving.a_end, comoving.a_begin, start_origin));
+    return;  // the steps' bounds are checked against the timeline in ln a by the engine
+  }
   if (!(t_end > t_begin))
     throw InputError(fmt::format("{} = {} must be later than the start time {} ({})", p.where("run.t_end"), t_end,
                                  t_begin, start_origin));

@@ -1,6 +1,7 @@
 // Everything a run is configured with, read once from the validated parameter file.
 #pragma once
 #include <string>
+#include <vector>
 
 #include "core/Units.hpp"
 #include "cosmology/Background.hpp"
@@ -20,6 +21,7 @@ struct OutputConfig {
   std::string directory = "output";
   std::string basename = "snapshot";
   double delta_time = 0.0;          // 0: first and last only
+  std::vector<double> scale_factors;  // comoving runs: the listed output times, increasing
   bool dump_task_graph = false;
   long long dump_timeline_every = 0;
   long long statistics_every = 0;
@@ -30,14 +32,23 @@ struct RestartConfig {
   double every_minutes = 0.0;
 };
 
+// How a comoving run's initial conditions files are to be read (units h-scaled, in cgs; 0:
+// what the file's /Units say, else GADGET's Mpc/h, 1e10 Msun/h and km/s).
+struct ComovingFileConventions {
+  double length_cgs = 0.0, mass_cgs = 0.0, velocity_cgs = 0.0;
+  bool gadget_velocities = true;  // v_pec / sqrt(a); false: v_pec
+  bool h_scaled = true;
+};
+
 // A comoving run (docs/physics.md §11): the clock is the scale factor from a_begin to a_end,
 // the state comoving (x', v' = a^2 dx/dt, rho', u', h'). Hydro with gamma = 5/3 and gravity;
 // cooling, star formation and feedback are not yet available in comoving form.
 struct ComovingConfig {
   bool enabled = false;
   cosmology::CosmologyParams cosmology;
-  double a_begin = 0.02;
+  double a_begin = 0.02;  // 0 in a parameter file: the initial conditions' /Header/Time
   double a_end = 1.0;
+  ComovingFileConventions files;
 };
 
 struct RunConfig {
@@ -68,6 +79,8 @@ struct RunConfig {
   // (`start_origin` says where it came from): t_end after the start, dt_max and the snapshot
   // interval no shorter than one tick. Throws InputError naming the key and its line.
   void check_times(const ParameterFile& p, const std::string& start_origin) const;
+  // A comoving run's t_begin and t_end: ln a_begin and ln a_end (again once a_begin is settled).
+  void set_comoving_times();
 };
 
 }  // namespace fountain

@@ -49,6 +49,12 @@ bool parse_bool(const std::string& s, bool& out) {
   return false;
 }
 
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") + 1 - b);
+}
+
 // Checks one value against its spec and returns its canonical text.
 std::string check_value(const ParamSpec& spec, const std::string& value, const std::string& where) {
   auto out_of_range = [&](double v) {
@@ -80,6 +86,26 @@ std::string check_value(const ParamSpec& spec, const std::string& value, const s
       if (!parse_bool(value, b))
         throw InputError(fmt::format("{}: key '{}' must be true or false, got '{}'", where, spec.key, value));
       return b ? "true" : "false";
+    }
+    case ParamKind::RealList: {
+      // "0.1, 0.5, 1" (a YAML sequence arrives joined so); empty: no values.
+      std::string body = trim(value);
+      if (body.size() >= 2 && body.front() == '[' && body.back() == ']') body = trim(body.substr(1, body.size() - 2));
+      std::string canonical;
+      std::size_t start = 0;
+      while (!body.empty() && start <= body.size()) {
+        const std::size_t comma = std::min(body.find(',', start), body.size());
+        const std::string item = trim(body.substr(start, comma - start));
+        double v = 0;
+        if (!parse_real(item, v))
+          throw InputError(fmt::format("{}: key '{}' must be a list of finite numbers, got '{}' in '{}'", where,
+                                       spec.key, item, value));
+        if (out_of_range(v))
+          throw InputError(fmt::format("{}: key '{}' holds {}, out of range {}", where, spec.key, item, range_text()));
+        canonical += fmt::format("{}{}", canonical.empty() ? "" : ", ", v);
+        start = comma + 1;
+      }
+      return canonical;
     }
     case ParamKind::Text:
       if (!spec.choices.empty()) {
@@ -143,18 +169,36 @@ ParameterFile ParameterFile::parse(const std::string& yaml_text, const std::stri
       const std::string where = fmt::format("{}:{}", origin, entry.first.Mark().line + 1);
       const ParamSpec* spec = find_spec(key);
       if (!spec) throw InputError(fmt::format("{}: unknown key '{}'", where, key));
-      if (!entry.second.IsScalar())
-        throw InputError(fmt::format("{}: key '{}' must be a single value", where, key));
+      std::string value;
+      if (spec->kind == ParamKind::RealList && entry.second.IsSequence()) {
+        for (const auto& item : entry.second) {
+          if (!item.IsScalar())
+            throw InputError(fmt::format("{}: key '{}' must be a list of numbers", where, key));
+          value += (value.empty() ? "" : ", ") + item.Scalar();
+        }
+      } else if (entry.second.IsScalar()) {
+        value = entry.second.Scalar();
+      } else {
+        throw InputError(fmt::format("{}: key '{}' must be a single value{}", where, key,
+                                     spec->kind == ParamKind::RealList ? " or a list of numbers" : ""));
+      }
       if (pf.given_.count(key)) throw InputError(fmt::format("{}: key '{}' is given twice", where, key));
-      pf.values_[key] = check_value(*spec, entry.second.Scalar(), where);
+      pf.values_[key] = check_value(*spec, value, where);
       pf.given_[key] = entry.first.Mark().line + 1;
     }
   }
   for (const auto& spec : parameter_schema()) {
-    if (pf.values_.count(spec.key)) continue;
-    if (!spec.default_value)
-      throw InputError(fmt::format("{}: required key '{}' is missing", origin, spec.key));
+    if (pf.values_.count(spec.key) || !spec.default_value) continue;
     pf.values_[spec.key] = check_value(spec, *spec.default_value, origin + " (default)");
+  }
+  for (const auto& spec : parameter_schema()) {
+    if (pf.values_.count(spec.key)) continue;
+    if (spec.required_unless.empty() || pf.values_.at(spec.required_unless) != "true")
+      throw InputError(fmt::format("{}: required key '{}' is missing{}", origin, spec.key,
+                                   spec.required_unless.empty()
+                                       ? ""
+                                       : fmt::format(" (it may be left out when {} is true)", spec.required_unless)));
+    pf.values_[spec.key] = check_value(spec, spec.default_unless, origin + " (default)");
   }
   return pf;
 }
@@ -190,6 +234,18 @@ long long ParameterFile::integer(const std::string& key) const {
 bool ParameterFile::flag(const std::string& key) const {
   spec(key);
   return values_.at(key) == "true";
+}
+
+std::vector<double> ParameterFile::reals(const std::string& key) const {
+  spec(key);
+  std::vector<double> out;
+  const std::string& text = values_.at(key);
+  for (std::size_t start = 0; start < text.size();) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    out.push_back(std::strtod(text.substr(start, comma - start).c_str(), nullptr));
+    start = comma + 1;
+  }
+  return out;
 }
 
 const std::string& ParameterFile::text(const std::string& key) const {

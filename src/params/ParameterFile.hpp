@@ -3,6 +3,7 @@
 #include <cstddef>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "params/ParameterSchema.hpp"
 
@@ -22,6 +23,7 @@ class ParameterFile {
   double real(const std::string& key) const;
   long long integer(const std::string& key) const;
   bool flag(const std::string& key) const;
+  std::vector<double> reals(const std::string& key) const;  // a list key's values, in the file's order
   const std::string& text(const std::string& key) const;
   bool was_given(const std::string& key) const { return given_.count(key) != 0; }
   // "FILE:LINE: key 'KEY'" for a key the file gives, "FILE: key 'KEY' (default)" otherwise:

@@ -7,26 +7,47 @@ namespace fountain {
 namespace {
 constexpr double inf = std::numeric_limits<double>::infinity();
 
+ParamSpec spec(std::string key, ParamKind kind, std::optional<std::string> def, double lo, double hi,
+               bool lo_exclusive, std::string doc, std::vector<std::string> choices = {}) {
+  ParamSpec p;
+  p.key = std::move(key);
+  p.kind = kind;
+  p.default_value = std::move(def);
+  p.min = lo;
+  p.max = hi;
+  p.min_exclusive = lo_exclusive;
+  p.doc = std::move(doc);
+  p.choices = std::move(choices);
+  return p;
+}
 ParamSpec real(std::string key, std::optional<std::string> def, double lo, double hi,
                std::string doc, bool lo_exclusive = false) {
-  return {std::move(key), ParamKind::Real, std::move(def), lo, hi, lo_exclusive, std::move(doc), {}};
+  return spec(std::move(key), ParamKind::Real, std::move(def), lo, hi, lo_exclusive, std::move(doc));
 }
 ParamSpec integer(std::string key, std::optional<std::string> def, double lo, double hi,
                   std::string doc) {
-  return {std::move(key), ParamKind::Integer, std::move(def), lo, hi, false, std::move(doc), {}};
+  return spec(std::move(key), ParamKind::Integer, std::move(def), lo, hi, false, std::move(doc));
 }
 ParamSpec boolean(std::string key, std::string def, std::string doc) {
-  return {std::move(key), ParamKind::Boolean, std::move(def), -inf, inf, false, std::move(doc), {}};
+  return spec(std::move(key), ParamKind::Boolean, std::move(def), -inf, inf, false, std::move(doc));
 }
 ParamSpec text(std::string key, std::optional<std::string> def, std::string doc,
                std::vector<std::string> choices = {}) {
-  return {std::move(key), ParamKind::Text, std::move(def), -inf, inf, false, std::move(doc),
-          std::move(choices)};
+  return spec(std::move(key), ParamKind::Text, std::move(def), -inf, inf, false, std::move(doc), std::move(choices));
+}
+ParamSpec real_list(std::string key, double lo, double hi, std::string doc, bool lo_exclusive = false) {
+  return spec(std::move(key), ParamKind::RealList, std::string(), lo, hi, lo_exclusive, std::move(doc));
 }
 ParamSpec choice_or_number(std::string key, std::string def, std::vector<std::string> choices, double lo, double hi,
                            std::string doc) {
-  ParamSpec p{std::move(key), ParamKind::Text, std::move(def), lo, hi, false, std::move(doc), std::move(choices)};
+  ParamSpec p = spec(std::move(key), ParamKind::Text, std::move(def), lo, hi, false, std::move(doc), std::move(choices));
   p.or_number = true;
+  return p;
+}
+// A required key that `flag`, when true, makes unnecessary; it then takes `fallback`.
+ParamSpec required_unless(ParamSpec p, std::string flag, std::string fallback) {
+  p.required_unless = std::move(flag);
+  p.default_unless = std::move(fallback);
   return p;
 }
 }  // namespace
@@ -35,7 +56,10 @@ const std::vector<ParamSpec>& parameter_schema() {
   static const std::vector<ParamSpec> schema = {
       // run
       real("run.t_begin", "0", -inf, inf, "Simulation time of the initial conditions (internal units)."),
-      real("run.t_end", std::nullopt, -inf, inf, "Time at which the run stops (internal units). Required."),
+      required_unless(real("run.t_end", std::nullopt, -inf, inf,
+                           "Time at which the run stops (internal units). Required, but in a comoving run, which "
+                           "ends at cosmology.a_end."),
+                      "cosmology.enabled", "0"),
       integer("run.threads", "0", 0, 4096, "Worker threads; 0 uses every core TBB sees."),
       boolean("run.pin_threads", "false",
               "Bind each worker thread to one core (each MPI rank on a node to its own cores); "
@@ -46,13 +70,30 @@ const std::vector<ParamSpec>& parameter_schema() {
            "GADGET-layout HDF5 initial conditions; a relative path is taken from the parameter file's folder. Required."),
       boolean("initial_conditions.periodic", "false",
               "Periodic box of size /Header/BoxSize (true) or open boundaries (false)."),
+      real("initial_conditions.length_unit_cgs", "0", 0, inf,
+           "Comoving runs: the files' length unit in cm, h-scaled (3.0856775814913673e24 for Mpc/h, 3.0856775814913673e21 for N-GenIC's kpc/h); 0 takes an HDF5 file's /Units (UnitLength_in_cm) and otherwise Mpc/h."),
+      real("initial_conditions.mass_unit_cgs", "0", 0, inf,
+           "Comoving runs: the files' mass unit in g, h-scaled; 0 takes an HDF5 file's /Units (UnitMass_in_g) and otherwise 1e10 Msun/h (GADGET's, MUSIC's and N-GenIC's)."),
+      real("initial_conditions.velocity_unit_cgs", "0", 0, inf,
+           "Comoving runs: the files' velocity unit in cm/s; 0 takes an HDF5 file's /Units (UnitVelocity_in_cm_per_s) and otherwise km/s."),
+      text("initial_conditions.velocity_convention", "gadget",
+           "Comoving runs: what the files' velocities are. gadget: v_pec / sqrt(a), as N-GenIC, 2LPTic, MUSIC, monofonIC and Fountain's own snapshots write them; peculiar: v_pec = a dx/dt.",
+           {"gadget", "peculiar"}),
+      boolean("initial_conditions.h_scaled", "true",
+              "Comoving runs: the files' lengths and masses are in h-scaled units (Mpc/h, Msun/h); false multiplies them by h on reading."),
       real("initial_conditions.smoothing_length_guess", "0", 0, inf,
            "First guess of h where the file has no SmoothingLength; 0 estimates it from the mean interparticle spacing."),
       // output
       text("output.directory", "output", "Folder for snapshots, task dumps and the log; created if missing; relative to the working directory."),
       text("output.basename", "snapshot", "Snapshot files are <basename>_NNNN.hdf5."),
       real("output.delta_time", "0", 0, inf,
-           "Time between snapshots; 0 writes only the first and the last."),
+           "Time between snapshots; 0 writes only the first and the last. Not for comoving runs, which list their output times."),
+      real_list("output.scale_factors", 0, inf,
+                "Comoving runs: scale factors of the snapshots between the first and the last, in increasing order, as a YAML list or comma-separated.",
+                true),
+      real_list("output.redshifts", -1, inf,
+                "Comoving runs: redshifts of the snapshots between the first and the last, in decreasing order (may be given with output.scale_factors: the union is written).",
+                true),
       boolean("output.dump_task_graph", "false",
               "Write the task dependency graph (DOT and SWIFT-style CSV) after the first step."),
       integer("output.dump_timeline_every", "0", 0, 1e15,
@@ -63,6 +104,16 @@ const std::vector<ParamSpec>& parameter_schema() {
       integer("restart.every_steps", "0", 0, 1e15,
               "A restart file <output.directory>/restart.hdf5 falls due every this many steps; it is written at the next recut of the cells after that (a few to a few tens of steps later, so writing it changes nothing in the run; if none comes within 1000 steps the cells are recut for it). The first is written at the start. 0: never (SIGTERM always writes one)."),
       real("restart.every_minutes", "0", 0, inf, "A restart file also falls due when this many minutes of wall time have passed since the last (written as for every_steps); 0 never."),
+      // cosmology
+      boolean("cosmology.enabled", "false",
+              "Comoving integration in an expanding periodic box (docs/physics.md, section 11): the clock is the scale factor a, positions and velocities comoving, units h-scaled (units.length_cgs is per h, so Mpc/h by default; likewise the mass unit). Needs gravity, a periodic box and gamma = 5/3."),
+      real("cosmology.omega_m", "0.3", 0, inf, "Omega_m: matter density today in units of the critical density.", true),
+      real("cosmology.omega_lambda", "0.7", -inf, inf, "Omega_Lambda: the cosmological constant's (w = -1). Omega_m + Omega_Lambda != 1 gives curvature."),
+      real("cosmology.omega_b", "0.04", 0, inf, "Omega_b: baryons' (sets the gas's mean density in the RMS-displacement step limit); at most omega_m."),
+      real("cosmology.hubble_param", "0.7", 0, inf, "h = H0 / (100 km/s/Mpc): converts h-scaled units to physical ones.", true),
+      real("cosmology.a_begin", "0", 0, 1,
+           "Scale factor at the start; 0 takes the initial conditions' /Header/Time. When given, the file's Time must agree to 1e-6."),
+      real("cosmology.a_end", "1", 0, inf, "Scale factor at which the run stops.", true),
       // units
       real("units.length_cgs", "3.0856775814913673e24", 0, inf, "Internal length unit in cm (default Mpc).", true),
       real("units.mass_cgs", "1.988409870698051e33", 0, inf, "Internal mass unit in g (default Msun).", true),
@@ -121,7 +172,9 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("feedback.promotion_hot_factor", "2", 0, inf, "When the hot neighbours' mean temperature exceeds promotion_factor x T*, T_prom is this times that mean."),
       // time integration
       real("time_integration.dt_min", "1e-8", 0, inf, "Smallest timestep allowed; a particle that needs less stops the run.", true),
-      real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep.", true),
+      real("time_integration.dt_max", "1e-6", 0, inf, "Largest timestep (in a comoving run, of physical time).", true),
+      real("time_integration.max_dln_a", "0.01", 0, 1,
+           "Comoving runs: largest step in ln a (GADGET's MaxSizeTimestep).", true),
       text("time_integration.courant_criterion", "syw",
            "syw: the paper's Courant criterion, dt = alpha_c h / (h |div v| + max(c, |v|) (1 + 0.6 alpha_v)); "
            "signal_velocity: GADGET-2's and SWIFT's, dt = C h / v_sig,max with v_sig,ij = c_i + c_j - 3 min(0, "
@@ -164,9 +217,10 @@ std::string parameter_reference_markdown() {
     const char* kind = p.kind == ParamKind::Real      ? "real"
                        : p.kind == ParamKind::Integer ? "integer"
                        : p.kind == ParamKind::Boolean ? "boolean"
+                       : p.kind == ParamKind::RealList ? "list of reals"
                                                       : "text";
     std::string range;
-    if (p.kind == ParamKind::Real || p.kind == ParamKind::Integer) {
+    if (p.kind == ParamKind::Real || p.kind == ParamKind::Integer || p.kind == ParamKind::RealList) {
       const bool has_lo = p.min != -inf, has_hi = p.max != inf;
       if (has_lo || has_hi)
         range = fmt::format("{}{}, {}]", p.min_exclusive ? "(" : "[", has_lo ? fmt::format("{:g}", p.min) : "-inf",
@@ -176,7 +230,10 @@ std::string parameter_reference_markdown() {
       if (p.or_number) range += fmt::format(", or [{:g}, {:g}]", p.min, p.max);
     }
     out += fmt::format("| `{}` | {} | {} | {} | {} |\n", p.key.substr(dot + 1), kind,
-                       p.default_value ? "`" + *p.default_value + "`" : "**required**", range, p.doc);
+                       p.default_value ? (p.default_value->empty() ? "(none)" : "`" + *p.default_value + "`")
+                       : p.required_unless.empty() ? "**required**"
+                                                   : fmt::format("**required** unless `{}`", p.required_unless),
+                       range, p.doc);
   }
   return out;
 }

@@ -7,7 +7,7 @@
 
 namespace fountain {
 
-enum class ParamKind { Real, Integer, Boolean, Text };
+enum class ParamKind { Real, Integer, Boolean, Text, RealList };
 
 struct ParamSpec {
   std::string key;                        // dotted path, e.g. "hydro.gamma"
@@ -19,6 +19,10 @@ struct ParamSpec {
   std::string doc;
   std::vector<std::string> choices;       // for Text keys with a fixed set of values
   bool or_number = false;                 // Text: one of `choices`, or a number in [min, max]
+  // A required key (no default) that this boolean key, when true, makes unnecessary; it then
+  // takes `default_unless`. (A comoving run ends at its last scale factor, not at run.t_end.)
+  std::string required_unless;
+  std::string default_unless;
 };
 
 // All keys Fountain knows; the one place a new key is declared.

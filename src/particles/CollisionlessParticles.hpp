@@ -10,9 +10,12 @@
 
 namespace fountain {
 
-// GADGET's particle types: what a snapshot calls PartType1 and PartType4.
-enum class Species : std::uint8_t { DarkMatter = 1, Star = 4 };
-inline const char* species_name(Species s) { return s == Species::Star ? "star" : "dark matter"; }
+// GADGET's particle types: what a snapshot calls PartType1, PartType2 and PartType4. Type 2
+// is a zoom's low-resolution dark matter, of several masses (files' types 2, 3 and 5).
+enum class Species : std::uint8_t { DarkMatter = 1, LowResDarkMatter = 2, Star = 4 };
+inline const char* species_name(Species s) {
+  return s == Species::Star ? "star" : s == Species::LowResDarkMatter ? "low-resolution dark matter" : "dark matter";
+}
 
 // Dark matter and stars move under gravity alone: a position, the integrated velocity and
 // the gravitational acceleration, on their own individual timesteps. They share one store
