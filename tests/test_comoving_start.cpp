@@ -8,6 +8,7 @@
 #include "app/ComovingStart.hpp"
 #include "core/Error.hpp"
 #include "engine/RunConfig.hpp"
+#include "gravity/GravityParams.hpp"
 #include "io/GadgetBinary.hpp"
 #include "io/Hdf5File.hpp"
 #include "io/InitialConditions.hpp"
@@ -236,6 +237,32 @@ TEST(ComovingStart, Hdf5FilesGiveEveryDarkMatterTypeAndTheirUnits) {
   EXPECT_FALSE(ic.cosmology.present ? ic.cosmology.omega0 != 0.0 : false);
   // Without the cosmological option only the gas and type 1 count: no gas is then an error.
   EXPECT_NE(error_of([&] { io::read_initial_conditions(path); }).find("no gas particles"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace fountain
+
+namespace fountain {
+namespace {
+
+// Softenings of a comoving zoom: a low-resolution particle 8 times the high-resolution mass
+// softens over twice the length; every softening is comoving until the dark matter's reaches
+// its physical limit, then shrinks as 1/a, keeping the species' ratios.
+TEST(ComovingSoftening, LowResolutionParticlesScaleByMassAndAllStopAtThePhysicalLimit) {
+  GravityParams g;
+  g.softening_dark_matter = 0.05;
+  g.softening_gas = 0.025;
+  g.low_res_reference_mass = 3.0;
+  EXPECT_EQ(g.softening(Species::DarkMatter, 3.0), 0.05);
+  EXPECT_NEAR(g.softening(Species::LowResDarkMatter, 24.0), 0.1, 1e-15);
+  EXPECT_NEAR(g.softening(Species::LowResDarkMatter, 3.0 * 64.0), 0.2, 1e-15);
+  EXPECT_DOUBLE_EQ(g.softening(Species::Star, 1.0), 0.0375);
+  EXPECT_EQ(g.softening_factor(0.5), 1.0);  // no limit given
+  g.softening_max_physical = 0.01;
+  EXPECT_EQ(g.softening_factor(0.1), 1.0);   // a eps' = 0.005 < 0.01: comoving
+  EXPECT_DOUBLE_EQ(g.softening_factor(0.2), 1.0);  // at the limit
+  EXPECT_NEAR(g.softening_factor(0.5), 0.4, 1e-15);  // physical 0.5 * 0.05 * 0.4 = 0.01
+  EXPECT_NEAR(0.5 * g.softening_factor(0.5) * g.softening_dark_matter, 0.01, 1e-15);
 }
 
 }  // namespace

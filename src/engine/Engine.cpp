@@ -58,6 +58,15 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     throw InputError(fmt::format("the initial conditions hold {} dark matter particles but gravity is off "
                                  "(set gravity.enabled: true)",
                                  dm_.size()));
+  // A zoom's low-resolution particles soften in proportion to the high-resolution ones by
+  // their mass's cube root: the reference is the lightest high-resolution particle (or, with
+  // none, the lightest low-resolution one).
+  for (Species kind : {Species::DarkMatter, Species::LowResDarkMatter}) {
+    double lightest = 0.0;
+    for (std::size_t i = 0; i < dm_.size(); ++i)
+      if (dm_.species[i] == kind && (lightest == 0.0 || dm_.mass[i] < lightest)) lightest = dm_.mass[i];
+    if (lightest > 0.0 && config_.gravity.low_res_reference_mass == 0.0) config_.gravity.low_res_reference_mass = lightest;
+  }
   ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_, dm_, config_.gravity, nullptr, {}});
   if (executor_.threads() > 1)
     ctx_->in_task_for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) {

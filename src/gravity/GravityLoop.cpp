@@ -20,12 +20,12 @@ void build_tree(StepContext& ctx) {
   for (std::size_t i = 0; i < gas.size(); ++i) {
     x.push_back(gas.x[i]);
     m.push_back(gas.dynamical_mass(i));  // hidden stars pull too
-    eps.push_back(ctx.gravity.softening_gas);
+    eps.push_back(ctx.softening_gas());
   }
   for (std::size_t i = 0; i < dm.size(); ++i) {
     x.push_back(dm.x[i]);
     m.push_back(dm.mass[i]);
-    eps.push_back(ctx.gravity.softening(dm.species[i]));
+    eps.push_back(ctx.softening_of(i));
   }
   TreeConfig config;
   if (ctx.long_range) {
@@ -71,11 +71,11 @@ void refit_tree_group(StepContext& ctx, int g) {
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n_gas = gas.size();
-  const double eps_gas = ctx.gravity.softening_gas;
+  const double eps_gas = ctx.softening_gas();
   ctx.tree->refit_group(g, [&](std::size_t i) {
     if (i < n_gas) return GravityTree::RefitSource{gas.x[i], gas.dynamical_mass(i), eps_gas};
     const std::size_t j = i - n_gas;
-    return GravityTree::RefitSource{dm.x[j], dm.mass[j], ctx.gravity.softening(dm.species[j])};
+    return GravityTree::RefitSource{dm.x[j], dm.mass[j], ctx.softening_of(j)};
   });
 }
 
@@ -103,13 +103,13 @@ void walk_cell(StepContext& ctx, int c) {
   std::vector<std::size_t> gas_targets, dm_targets;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
-    targets.push_back({gas.x[i], ctx.gravity.softening_gas, old_acceleration(gas.a_grav[i]),
+    targets.push_back({gas.x[i], ctx.softening_gas(), old_acceleration(gas.a_grav[i]),
                        static_cast<std::int64_t>(i)});
     gas_targets.push_back(i);
   }
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
     if (!ctx.is_active_dm(i)) continue;
-    targets.push_back({dm.x[i], ctx.gravity.softening(dm.species[i]), old_acceleration(dm.a_grav[i]),
+    targets.push_back({dm.x[i], ctx.softening_of(i), old_acceleration(dm.a_grav[i]),
                        static_cast<std::int64_t>(gas.size() + i)});
     dm_targets.push_back(i);
   }

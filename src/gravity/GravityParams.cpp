@@ -20,6 +20,13 @@ GravityParams GravityParams::from(const ParameterFile& p, const Units& units) {
     throw InputError(fmt::format("{}: gravity is on but neither 'gravity.softening_gas' nor "
                                  "'gravity.softening_dark_matter' is set (> 0)",
                                  p.origin()));
+  g.softening_max_physical = p.real("gravity.softening_max_physical");
+  if (g.softening_max_physical > 0.0 && !(g.softening_dark_matter > 0.0))
+    throw InputError(fmt::format("{} = {} needs gravity.softening_dark_matter, to which it is the physical limit",
+                                 p.where("gravity.softening_max_physical"), g.softening_max_physical));
+  if (g.softening_max_physical > 0.0 && !p.flag("cosmology.enabled"))
+    throw InputError(fmt::format("{} is for comoving runs (a plain run's softenings are physical already)",
+                                 p.where("gravity.softening_max_physical")));
   g.alpha_force = p.real("gravity.alpha_force");
   g.eta = p.real("gravity.eta");
   g.mesh_cells = static_cast<int>(p.integer("gravity.mesh_cells"));

@@ -145,6 +145,8 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("gravity.softening_dark_matter", "0", 0, inf,
            "Plummer-equivalent softening of dark matter (the spline reaches 2.8 times it); stars take the mean of gas and dark matter."),
       real("gravity.softening_gas", "0", 0, inf, "Plummer-equivalent softening of gas; 0 takes half the dark matter's (the paper)."),
+      real("gravity.softening_max_physical", "0", 0, inf,
+           "Comoving runs: the dark matter's largest physical softening (GADGET's SofteningMaxPhys). The softenings above are comoving; once a times softening_dark_matter exceeds this, every softening shrinks in proportion so that the dark matter's stays at this physical length. A zoom's low-resolution particles soften over softening_dark_matter times the cube root of their mass over the high-resolution dark matter's. 0: comoving throughout."),
       real("gravity.alpha_force", "0.01", 0, 1, "Relative tree opening criterion: accept a node when its neglected term is below alpha_force |a_old|.", true),
       text("gravity.opening_criterion", "gadget2", "gadget2: G M l^2/r^4 <= alpha |a_old| (GADGET, the paper); quadrupole: G M l^3/r^5 (GADGET-4, matched to the quadrupole expansion).",
            {"gadget2", "quadrupole"}),

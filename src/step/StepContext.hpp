@@ -67,6 +67,11 @@ struct StepContext {
     double hubble_flow = 0.0;  // a^2 H: the Hubble flow's part of v' per comoving length
   };
   Expansion expansion{};
+  // The factor on every comoving softening at ti_current (GravityParams::softening_factor;
+  // 1 in plain runs).
+  double softening_factor = 1.0;
+  double softening_gas() const;
+  double softening_of(std::size_t dm_index) const;  // of collisionless particle dm_index
   // Comoving runs: the RMS-displacement limits of the physical step, per species (set at each
   // recut; infinite otherwise).
   double dt_rms_gas = std::numeric_limits<double>::infinity();

@@ -22,6 +22,12 @@ void StepContext::set_time(IntegerTime ti) {
   expansion.a = comoving->scale_factor(t);
   expansion.hubble = comoving->hubble(t);
   expansion.hubble_flow = expansion.a * expansion.a * expansion.hubble;
+  softening_factor = gravity.softening_factor(expansion.a);
+}
+
+double StepContext::softening_gas() const { return softening_factor * gravity.softening_gas; }
+double StepContext::softening_of(std::size_t j) const {
+  return softening_factor * gravity.softening(dm.species[j], dm.mass[j]);
 }
 
 namespace {
@@ -227,7 +233,7 @@ void timestep(StepContext& ctx, int c) {
       const double cs = hydro::sound_speed(rho, u, p.gamma);
       double dt = courant_dt(ctx, i, gas.v_sig[i]);
       if (ctx.gravity.enabled)
-        dt = std::min(dt, ctx.comoving ? physical_gravity_timestep(ctx, ctx.gravity.softening_gas, gas.a_grav[i], gas.a_hydro[i])
+        dt = std::min(dt, ctx.comoving ? physical_gravity_timestep(ctx, ctx.softening_gas(), gas.a_grav[i], gas.a_hydro[i])
                                        : gravity_timestep(ctx.gravity, ctx.gravity.softening_gas, gas.a_hydro[i] + gas.a_grav[i]));
       if (dt < ctx.integration.dt_min)
         throw InputError(fmt::format("gas particle id {} needs a timestep {} below dt_min = {} at t = {} (h = {}, "
@@ -254,8 +260,8 @@ void timestep(StepContext& ctx, int c) {
         throw InputError(fmt::format("{} particle id {} has a non-finite state at t = {} (|x| = {}, |v| = {}, |a| = {})",
                                      species_name(dm.species[i]), dm.id[i], ctx.timeline.time(ctx.ti_current), norm(dm.x[i]), norm(dm.v_full[i]),
                                      norm(dm.a_grav[i])));
-      const double dt = ctx.comoving ? physical_gravity_timestep(ctx, ctx.gravity.softening(dm.species[i]), dm.a_grav[i], Vec3{})
-                                     : gravity_timestep(ctx.gravity, ctx.gravity.softening(dm.species[i]), dm.a_grav[i]);
+      const double dt = ctx.comoving ? physical_gravity_timestep(ctx, ctx.softening_of(i), dm.a_grav[i], Vec3{})
+                                     : gravity_timestep(ctx.gravity, ctx.softening_of(i), dm.a_grav[i]);
       if (dt < ctx.integration.dt_min)
         throw InputError(fmt::format("{} particle id {} needs a timestep {} below dt_min = {} at t = {}",
                                      species_name(dm.species[i]), dm.id[i], dt, ctx.integration.dt_min, ctx.timeline.time(ctx.ti_current)));
