@@ -449,10 +449,11 @@ double common_mass(const std::vector<double>& mass) {
 }
 
 void write_ic_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
-                   const Vec3& box_size, bool periodic, double time) {
+                   const Vec3& box_size, bool periodic, double time, const CosmologicalIcInfo* cosmological = nullptr) {
   const std::size_t n = gas.size();
   const std::string prefix = "cannot create initial conditions " + path + ": ";
-  if (n == 0) throw InputError(prefix + "there are no gas particles to write");
+  if (n == 0 && (cosmological == nullptr || dm == nullptr || dm->size() == 0))
+    throw InputError(prefix + "there are no gas particles to write");
   auto check = [&](std::size_t size, const char* field) {
     if (size != n) throw InputError(prefix + fmt::format("gas field {} has {} entries, expected {}", field, size, n));
   };
@@ -486,29 +487,50 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const Colli
                                             *dup));
   }
 
+  // A comoving run's files hold GADGET's velocities and physical energies (u = u' / a^2 for
+  // gamma = 5/3, the only adiabatic index of comoving runs).
+  const double a = cosmological != nullptr ? cosmological->a : 1.0;
+  const double v_scale = cosmological != nullptr ? std::pow(a, -1.5) : 1.0;
+  const double u_scale = cosmological != nullptr ? 1.0 / (a * a) : 1.0;
+  auto scaled = [](auto values, double s) {
+    if (s != 1.0)
+      for (auto& v : values) v = v * s;
+    return values;
+  };
   hdf5::write_file_atomically(path, "initial conditions", [&](File& file) {
-    hdf5::write_gadget_header(file, {n, n_dm, 0, 0, 0, 0}, {box_size.x, box_size.y, box_size.z}, time);
+    if (cosmological != nullptr) {
+      hdf5::write_gadget_header(file, {n, n_dm, 0, 0, 0, 0}, {box_size.x}, a, &cosmological->cosmology);
+      const Units& u = cosmological->units;
+      file.create_group("/Units");
+      file.write_attribute("/Units", "UnitLength_in_cm", u.length_cgs);
+      file.write_attribute("/Units", "UnitMass_in_g", u.mass_cgs);
+      file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", u.velocity_cgs);
+    } else {
+      hdf5::write_gadget_header(file, {n, n_dm, 0, 0, 0, 0}, {box_size.x, box_size.y, box_size.z}, time);
+    }
     // Not a GADGET field; records the boundary conditions the set-up was made for.
     file.write_attribute(kHeader, "Periodic", periodic ? 1 : 0);
-    file.create_group(kGas);
-    file.write_dataset(kGasSpecies.dataset("Coordinates"), gas.x);
-    file.write_dataset(kGasSpecies.dataset("Velocities"), gas.v_full);
-    file.write_dataset(kGasSpecies.dataset("ParticleIDs"), gas.id);
-    file.write_dataset(kGasSpecies.dataset("Masses"), gas.mass);
-    file.write_dataset(kGasSpecies.dataset("InternalEnergy"), gas.u_full);
-    file.write_dataset(kGasSpecies.dataset("SmoothingLength"), gas.h);
+    std::vector<double> table(6, 0.0);
+    if (n > 0) {
+      file.create_group(kGas);
+      file.write_dataset(kGasSpecies.dataset("Coordinates"), gas.x);
+      file.write_dataset(kGasSpecies.dataset("Velocities"), scaled(gas.v_full, v_scale));
+      file.write_dataset(kGasSpecies.dataset("ParticleIDs"), gas.id);
+      file.write_dataset(kGasSpecies.dataset("Masses"), gas.mass);
+      file.write_dataset(kGasSpecies.dataset("InternalEnergy"), scaled(gas.u_full, u_scale));
+      file.write_dataset(kGasSpecies.dataset("SmoothingLength"), gas.h);
+      table[0] = common_mass(gas.mass);
+    }
     if (dm == nullptr) return;
 
     // Each type's common mass in the table (the header as written above has zeros).
-    std::vector<double> table(6, 0.0);
-    table[0] = common_mass(gas.mass);
     table[1] = common_mass(dm->mass);
     file.write_attribute(kHeader, "MassTable", table);
 
     const Species& sp = kDarkMatterSpecies;
     file.create_group(sp.group);
     file.write_dataset(sp.dataset("Coordinates"), dm->x);
-    file.write_dataset(sp.dataset("Velocities"), dm->v_full);
+    file.write_dataset(sp.dataset("Velocities"), scaled(dm->v_full, v_scale));
     file.write_dataset(sp.dataset("ParticleIDs"), dm->id);
     file.write_dataset(sp.dataset("Masses"), dm->mass);
   });
@@ -524,6 +546,11 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               const Vec3& box_size, bool periodic, double time) {
   write_ic_file(path, gas, &dm, box_size, periodic, time);
+}
+
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
+                              double box_size, const CosmologicalIcInfo& info) {
+  write_ic_file(path, gas, &dm, {box_size, box_size, box_size}, true, info.a, &info);
 }
 
 }  // namespace fountain::io

@@ -2,7 +2,9 @@
 #pragma once
 #include <string>
 
+#include "core/Units.hpp"
 #include "core/Vec3.hpp"
+#include "cosmology/Background.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
 
@@ -60,5 +62,17 @@ void write_initial_conditions(const std::string& path, const GasParticles& gas, 
 // types. read_initial_conditions reads both back.
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               const Vec3& box_size, bool periodic, double time = 0.0);
+
+// A comoving run's initial conditions at scale factor a, from particles in its code variables
+// (h-scaled units `units`): written as GADGET's cosmological files are (Time = a, the
+// cosmology in /Header, /Units, velocities v_pec / sqrt(a) = v' / a^(3/2), physical internal
+// energies u = u' / a^2), which a comoving run reads back exactly. Gas may be absent.
+struct CosmologicalIcInfo {
+  cosmology::CosmologyParams cosmology;
+  double a = 1.0;
+  Units units;
+};
+void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
+                              double box_size, const CosmologicalIcInfo& info);
 
 }  // namespace fountain::io

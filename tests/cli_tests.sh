@@ -307,6 +307,41 @@ with h5py.File('out/snapshot_0003.hdf5', 'r') as f:
         head -1 restart.txt
         for k in 1 2 3; do "$python" "$root/tests/compare_snapshots.py" "outA/snapshot_000$k.hdf5" "outB/snapshot_000$k.hdf5"; done ;;
     esac ;;
+  ic_cosmo_run)
+    # Fountain's own cosmological box (2 x 8^3, 2LPT, z = 49) runs comovingly with the
+    # cosmology it was made for, and refuses another; bad options are named.
+    "$bin" ic cosmo -n 8 --box 20 --omega-b 0.03 --hubble 0.6 --seed 5 -o box.hdf5 > ic.txt 2>&1 || { cat ic.txt; fail "ic cosmo"; }
+    grep -q "^wrote box.hdf5 (8^3 dark matter and gas particles" ic.txt || { cat ic.txt; fail "ic cosmo's summary"; }
+    cat > params.yml <<EOT
+initial_conditions:
+  file: box.hdf5
+  periodic: true
+cosmology:
+  enabled: true
+  omega_b: 0.03
+  hubble_param: 0.6
+  a_end: 0.04
+gravity:
+  enabled: true
+  softening_dark_matter: 0.1
+time_integration:
+  dt_max: 1
+output:
+  directory: out
+EOT
+    "$bin" run params.yml -q > run.txt 2>&1 || { cat run.txt; fail "comoving run of ic cosmo's box"; }
+    grep -q "^done: .* steps to a = 0.04" run.txt || { cat run.txt; fail "the run did not reach a = 0.04"; }
+    "$python" "$root/tests/check_snapshot_yt.py" out/snapshot_0001.hdf5
+    sed -i 's/hubble_param: 0.6/hubble_param: 0.7/; s/directory: out/directory: out2/' params.yml
+    expect_error "HubbleParam = 0.6 differs from params.yml:.*cosmology.hubble_param.* = 0.7"
+    set +e
+    "$bin" ic cosmo -n 12 -o bad.hdf5 > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "power of two" bad.txt || { cat bad.txt; fail "-n 12 was not refused"; }
+    set +e
+    "$bin" ic sod --box 3 -o bad.hdf5 > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "applies to cosmo only" bad.txt || { cat bad.txt; fail "--box for sod was not refused"; } ;;
   snapshot_opens_in_yt)
     params good.hdf5 out
     "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }

@@ -89,12 +89,12 @@ TEST(ComovingParameters, TimesOfPlainRunsAndKeysOfComovingRunsAreRefusedWhereThe
 // gas is at 56.66 K at z = 49 (with T_CMB = 2.728 K, Eisenstein & Hu's).
 TEST(ComovingStart, InitialGasTemperatureFollowsTheCmbThenAdiabaticCooling) {
   const cosmology::CosmologyParams mw{0.3, 0.7, 0.03, 0.6};
-  EXPECT_NEAR(initial_gas_temperature(mw, 0.02), 56.66, 0.01);
+  EXPECT_NEAR(cosmology::initial_gas_temperature(mw, 0.02), 56.66, 0.01);
   // Before decoupling the gas has the CMB's temperature.
-  EXPECT_NEAR(initial_gas_temperature(mw, 1.0 / 500.0), 2.728 * 500.0, 1e-9);
+  EXPECT_NEAR(cosmology::initial_gas_temperature(mw, 1.0 / 500.0), 2.728 * 500.0, 1e-9);
   // Continuous at decoupling.
   const double a_dec = 1.0 / 120.37;
-  EXPECT_NEAR(initial_gas_temperature(mw, a_dec * (1 - 1e-9)), initial_gas_temperature(mw, a_dec * (1 + 1e-9)), 1e-3);
+  EXPECT_NEAR(cosmology::initial_gas_temperature(mw, a_dec * (1 - 1e-9)), cosmology::initial_gas_temperature(mw, a_dec * (1 + 1e-9)), 1e-3);
 }
 
 // A zoom's GADGET binary file (gas with no internal energy, fine and coarse dark matter in
@@ -158,7 +158,7 @@ TEST(ComovingStart, GadgetBinaryZoomBecomesCodeVariables) {
   EXPECT_NEAR(ic.dm.v[2].z, 40.0 * std::pow(0.04, 1.5), 1e-12);
   // No energy in the file: u' = a^2 u of the decoupled gas's temperature (neutral, mu = 1.1856).
   const double kelvin_per_u = 2.0 / 3.0 * 1.1856 * 1.67262192e-24 / 1.380649e-16 * 1e10;
-  EXPECT_NEAR(ic.gas.u[0] / (0.04 * 0.04) * kelvin_per_u, initial_gas_temperature(config.comoving.cosmology, 0.04),
+  EXPECT_NEAR(ic.gas.u[0] / (0.04 * 0.04) * kelvin_per_u, cosmology::initial_gas_temperature(config.comoving.cosmology, 0.04),
               1e-9);
 
 }

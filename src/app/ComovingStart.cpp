@@ -14,8 +14,6 @@ namespace {
 
 constexpr double kMpcCgs = 3.0856775814913673e24;
 constexpr double kSolarMassCgs = 1.988409870698051e33;
-// Neutral primordial gas (X = 0.76): the mean particle mass of the cooling tables' coldest row.
-constexpr double kNeutralMeanMolecularWeight = 1.1856;
 
 bool agrees(double a, double b) { return std::fabs(a - b) <= 1e-6 * std::max(std::fabs(a), std::fabs(b)); }
 
@@ -39,12 +37,6 @@ void check_file_cosmology(const io::InitialConditions& ic, const cosmology::Cosm
 }
 
 }  // namespace
-
-double initial_gas_temperature(const cosmology::CosmologyParams& c, double a) {
-  const double omega_b_h2 = c.omega_b * c.hubble_param * c.hubble_param;
-  const double a_dec = 1.0 / (160.0 * std::pow(omega_b_h2 / 0.022, 0.4));
-  return a < a_dec ? cosmology::kCmbTemperature / a : cosmology::kCmbTemperature * a_dec / (a * a);
-}
 
 void to_comoving_variables(io::InitialConditions& ic, RunConfig& config, const ParameterFile& params,
                            const std::string& path) {
@@ -81,8 +73,8 @@ void to_comoving_variables(io::InitialConditions& ic, RunConfig& config, const P
   double u_initial = 0.0;
   if (!ic.has_internal_energy) {
     const double kelvin_per_u =
-        ideal_gas_kelvin_per_energy(units, config.hydro.gamma, kNeutralMeanMolecularWeight);
-    u_initial = a * a * initial_gas_temperature(cc.cosmology, a) / kelvin_per_u;
+        ideal_gas_kelvin_per_energy(units, config.hydro.gamma, cosmology::kNeutralMeanMolecularWeight);
+    u_initial = a * a * cosmology::initial_gas_temperature(cc.cosmology, a) / kelvin_per_u;
   }
   ic.box_size = ic.box_size * length;
   ic.time = a;

@@ -19,8 +19,4 @@ class ParameterFile;
 void to_comoving_variables(io::InitialConditions& ic, RunConfig& config, const ParameterFile& params,
                            const std::string& path);
 
-// The gas temperature (K) of a cosmological initial state at scale factor a: the CMB's until
-// the gas decouples from it at 1/a_dec = 160 (Omega_b h^2 / 0.022)^(2/5), adiabatic after.
-double initial_gas_temperature(const cosmology::CosmologyParams& c, double a);
-
 }  // namespace fountain

@@ -23,6 +23,7 @@ int default_resolution(const std::string& problem) {
   if (problem == "sedov") return 24;
   if (problem == "evrard") return 8;
   if (problem == "gresho") return 32;
+  if (problem == "cosmo") return 64;
   return 4000;  // sphere: particles per species
 }
 
@@ -44,6 +45,7 @@ double ic_particle_count(const IcRequest& r) {
   if (r.problem == "sedov") return 2.0 * n * n * n;
   if (r.problem == "gresho") return 2.0 * n * n * (n / 2);
   if (r.problem == "evrard") return (4.0 / 3.0) * M_PI * n * n * n;  // the cube of side 2n cut to the ball
+  if (r.problem == "cosmo") return (r.cosmo.gas ? 2.0 : 1.0) * n * n * n;
   return 2.0 * n;                                                    // sphere: gas + dark matter
 }
 
@@ -74,6 +76,23 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
   if (r.problem == "evrard" && r.resolution_given && r.resolution < 2)
     throw InputError(fmt::format("option -n,--resolution = {}: the Evrard sphere needs at least 2 cells per radius",
                                  r.resolution));
+  if (r.problem == "cosmo" && (resolution_of(r) < 2 || (resolution_of(r) & (resolution_of(r) - 1)) != 0 ||
+                               resolution_of(r) > 4096))
+    throw InputError(fmt::format("option -n,--resolution = {}: a cosmological box needs a power of two particles per "
+                                 "side, from 2 to 4096",
+                                 resolution_of(r)));
+  if (r.problem == "cosmo") {
+    const ics::CosmologicalBoxParams& c = r.cosmo;
+    if (!(c.box > 0.0 && std::isfinite(c.box))) throw InputError(fmt::format("option --box = {} must be positive", c.box));
+    if (!(c.a_start > 0.0 && c.a_start < 1.0))
+      throw InputError(fmt::format("option --z-start = {} must be positive", 1.0 / c.a_start - 1.0));
+    if (!(c.sigma_8 > 0.0)) throw InputError(fmt::format("option --sigma-8 = {} must be positive", c.sigma_8));
+    if (!(c.cosmology.omega_m > 0.0 && c.cosmology.omega_b >= 0.0 && c.cosmology.omega_b <= c.cosmology.omega_m))
+      throw InputError(fmt::format("options --omega-m = {} and --omega-b = {}: need 0 <= omega_b <= omega_m, omega_m > 0",
+                                   c.cosmology.omega_m, c.cosmology.omega_b));
+    if (!(c.cosmology.hubble_param > 0.0))
+      throw InputError(fmt::format("option --hubble = {} must be positive", c.cosmology.hubble_param));
+  }
   if (r.problem == "sphere" && r.resolution_given && r.resolution < 8)
     throw InputError(fmt::format("option -n,--resolution = {}: the sphere needs at least 8 particles per species",
                                  r.resolution));
@@ -92,6 +111,26 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
 std::string write_ic(const IcRequest& r) {
   check_ic_request(r, available_memory_bytes());
   const int n = resolution_of(r);
+  if (r.problem == "cosmo") {
+    ics::CosmologicalBoxParams c = r.cosmo;
+    c.level = static_cast<int>(std::lround(std::log2(n)));
+    const Units units;  // h-scaled: Mpc/h, Msun/h, km/s
+    const ics::CosmologicalBox box = ics::make_cosmological_box(c, units);
+    io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, {c.cosmology, box.a, units});
+    double rms = 0.0;
+    for (std::size_t i = 0; i < box.dark_matter.size(); ++i) {
+      const std::size_t cells = static_cast<std::size_t>(n);
+      const std::size_t ii = i / (cells * cells), jj = (i / cells) % cells, kk = i % cells;
+      Vec3 d = box.dark_matter.x[i] - Vec3{ii + 0.5, jj + 0.5, kk + 0.5} * (c.box / n);
+      for (int axis = 0; axis < 3; ++axis) d[axis] -= c.box * std::round(d[axis] / c.box);
+      rms += dot(d, d);
+    }
+    rms = std::sqrt(rms / static_cast<double>(box.dark_matter.size())) / (c.box / n);
+    return fmt::format("wrote {} ({}^3 dark matter{} particles of {:.4g} Msun/h{}, box {} Mpc/h, z = {}, "
+                       "rms displacement {:.3g} of the spacing)",
+                       r.output, n, c.gas ? " and gas" : "", box.dark_matter.mass[0],
+                       c.gas ? fmt::format(" and {:.4g}", box.gas.mass[0]) : "", c.box, 1.0 / c.a_start - 1.0, rms);
+  }
   if (r.problem == "sphere") {
     ics::RotatingSphereParams sphere = r.sphere;
     sphere.particles_per_species = n;

@@ -3,17 +3,19 @@
 #include <cstddef>
 #include <string>
 
+#include "ics/CosmologicalBox.hpp"
 #include "ics/RotatingSphere.hpp"
 
 namespace fountain {
 
 struct IcRequest {
-  std::string problem;      // sod | sedov | gresho | evrard | sphere
+  std::string problem;      // sod | sedov | gresho | evrard | sphere | cosmo
   std::string output;       // HDF5 file to write
   int resolution = 0;       // 0: the problem's default
   bool resolution_given = false;
   double gamma = 5.0 / 3.0;
   ics::RotatingSphereParams sphere;
+  ics::CosmologicalBoxParams cosmo;  // its level is set from the resolution
 };
 
 // The particle count a request makes (estimated from the lattice, before anything is built).

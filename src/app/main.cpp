@@ -51,14 +51,15 @@ int main(int argc, char** argv) {
 
   auto* ic = app.add_subcommand("ic", "Write the initial conditions of a validation problem");
   IcRequest request;
-  ic->add_option("problem", request.problem, "sod | sedov | gresho | evrard | sphere")
+  ic->add_option("problem", request.problem, "sod | sedov | gresho | evrard | sphere | cosmo")
       ->required()
-      ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere"}));
+      ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere", "cosmo"}));
   ic->add_option("-o,--output", request.output, "Output HDF5 file")->required();
   auto* resolution_opt =
       ic->add_option("-n,--resolution", request.resolution,
                      "Lattice cells per unit length (sod: left state; sedov, gresho: per box side; evrard: per radius); "
-                     "sphere: particles per species (default 4000)");
+                     "sphere: particles per species (default 4000); cosmo: particles per side and species, a power "
+                     "of two (default 64)");
   auto* gamma_opt = ic->add_option("--gamma", request.gamma, "Adiabatic index, in (1, 3] (sod, sedov, gresho)");
   ics::RotatingSphereParams& sphere = request.sphere;
   const std::vector<CLI::Option*> sphere_opts = {
@@ -69,6 +70,28 @@ int main(int argc, char** argv) {
       ic->add_option("--thermal-fraction", sphere.thermal_fraction, "sphere: gas specific energy u over |W|/M")
           ->capture_default_str(),
       ic->add_option("--gas-fraction", sphere.gas_fraction, "sphere: gas mass over total mass")->capture_default_str()};
+
+  ics::CosmologicalBoxParams& cosmo = request.cosmo;
+  double z_start = 49.0;
+  std::string transfer = "full";
+  bool no_gas = false;
+  const std::vector<CLI::Option*> cosmo_opts = {
+      ic->add_option("--box", cosmo.box, "cosmo: box side [Mpc/h]")->capture_default_str(),
+      ic->add_option("--z-start", z_start, "cosmo: starting redshift")->capture_default_str(),
+      ic->add_option("--seed", cosmo.seed, "cosmo: seed of the white noise")->capture_default_str(),
+      ic->add_option("--omega-m", cosmo.cosmology.omega_m, "cosmo: Omega_m")->capture_default_str(),
+      ic->add_option("--omega-lambda", cosmo.cosmology.omega_lambda, "cosmo: Omega_Lambda")->capture_default_str(),
+      ic->add_option("--omega-b", cosmo.cosmology.omega_b, "cosmo: Omega_b")->capture_default_str(),
+      ic->add_option("--hubble", cosmo.cosmology.hubble_param, "cosmo: h")->capture_default_str(),
+      ic->add_option("--sigma-8", cosmo.sigma_8, "cosmo: sigma_8 of the linear spectrum at z = 0")->capture_default_str(),
+      ic->add_option("--n-s", cosmo.n_s, "cosmo: spectral index")->capture_default_str(),
+      ic->add_option("--transfer", transfer, "cosmo: Eisenstein & Hu fit: full | no_wiggle | zero_baryon")
+          ->check(CLI::IsMember({"full", "no_wiggle", "zero_baryon"}))
+          ->capture_default_str(),
+      ic->add_option("--lpt", cosmo.lpt_order, "cosmo: Lagrangian perturbation order, 1 (Zel'dovich) or 2")
+          ->check(CLI::IsMember({1, 2}))
+          ->capture_default_str(),
+      ic->add_flag("--no-gas", no_gas, "cosmo: dark matter only")};
 
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
@@ -140,6 +163,19 @@ int main(int argc, char** argv) {
           if (o->count() > 0)
             throw InputError(fmt::format("option {} applies to the sphere only, not to {}", o->get_name(),
                                          request.problem));
+      if (request.problem != "cosmo")
+        for (const CLI::Option* o : cosmo_opts)
+          if (o->count() > 0)
+            throw InputError(fmt::format("option {} applies to cosmo only, not to {}", o->get_name(), request.problem));
+      if (request.problem == "cosmo") {
+        if (gamma_opt->count() > 0)
+          throw InputError("option --gamma does not apply to cosmo: comoving runs take gamma = 5/3");
+        cosmo.a_start = 1.0 / (1.0 + z_start);
+        cosmo.gas = !no_gas;
+        cosmo.transfer = transfer == "no_wiggle"     ? cosmology::TransferKind::no_wiggle
+                         : transfer == "zero_baryon" ? cosmology::TransferKind::zero_baryon
+                                                     : cosmology::TransferKind::full;
+      }
       if ((request.problem == "sphere" || request.problem == "evrard") && gamma_opt->count() > 0)
         throw InputError(fmt::format("option --gamma does not apply to {}: its initial conditions do not depend on "
                                      "it (the run's hydro.gamma sets it)",

@@ -88,4 +88,10 @@ SecondOrderGrowth Background::second_order_growth(double a) const {
   return {y[2], y[3] / y[2]};
 }
 
+double initial_gas_temperature(const CosmologyParams& c, double a) {
+  const double omega_b_h2 = c.omega_b * c.hubble_param * c.hubble_param;
+  const double a_dec = 1.0 / (160.0 * std::pow(omega_b_h2 / 0.022, 0.4));
+  return a < a_dec ? kCmbTemperature / a : kCmbTemperature * a_dec / (a * a);
+}
+
 }  // namespace fountain::cosmology

@@ -19,6 +19,8 @@ inline constexpr double kHubbleInternal = 100.0;
 
 // The CMB's temperature today (K), as Eisenstein & Hu's transfer function takes it.
 inline constexpr double kCmbTemperature = 2.728;
+// Neutral primordial gas (X = 0.76): the mean particle mass of the cooling tables' coldest row.
+inline constexpr double kNeutralMeanMolecularWeight = 1.1856;
 
 struct SecondOrderGrowth {
   double d2 = 0.0;  // D2, -> -(3/7) a^2 as a -> 0
@@ -44,5 +46,9 @@ class Background {
   CosmologyParams p_;
   double h0_;
 };
+
+// The gas temperature (K) of a cosmological initial state at scale factor a: the CMB's until
+// the gas decouples from it at 1/a_dec = 160 (Omega_b h^2 / 0.022)^(2/5), adiabatic after.
+double initial_gas_temperature(const CosmologyParams& c, double a);
 
 }  // namespace fountain::cosmology

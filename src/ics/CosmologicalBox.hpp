@@ -1,0 +1,45 @@
+// Initial conditions of a periodic cosmological box: dark matter (and gas) on a lattice displaced by Zel'dovich or 2LPT from a Gaussian field.
+#pragma once
+#include <cstdint>
+
+#include "core/Units.hpp"
+#include "cosmology/Background.hpp"
+#include "cosmology/TransferFunction.hpp"
+#include "ics/LagrangianPerturbation.hpp"
+#include "particles/CollisionlessParticles.hpp"
+#include "particles/GasParticles.hpp"
+
+namespace fountain::ics {
+
+struct CosmologicalBoxParams {
+  int level = 6;                 // N = 2^level particles per side and species
+  double box = 100.0;            // side L, Mpc/h comoving
+  double a_start = 0.02;         // z = 49
+  std::uint64_t seed = 1;
+  cosmology::CosmologyParams cosmology{};  // as a run's defaults
+  double sigma_8 = 0.9;
+  double n_s = 1.0;
+  cosmology::TransferKind transfer = cosmology::TransferKind::full;
+  int lpt_order = 2;             // 1: Zel'dovich, 2: second order
+  bool gas = true;               // gas at the cells' far corners, Omega_b / Omega_m of the mass
+  int cells() const { return 1 << level; }
+};
+
+// The particles in code variables of a comoving run in h-scaled units (Mpc/h, Msun/h, km/s;
+// positions comoving in [0, L), v' = a v_pec, u' = a^2 u of the decoupled gas's temperature).
+// Dark matter of cell n = (i N + j) N + k has ID 1 + n, at q = (i + 1/2, j + 1/2, k + 1/2) L/N
+// plus its displacement; the gas of that cell ID 1 + n + 2^40 at q + L/(2N) (1, 1, 1) plus the
+// same fields there. Masses: Omega_m rho_crit0 (L/N)^3 per cell, split by Omega_b / Omega_m.
+struct CosmologicalBox {
+  GasParticles gas;
+  CollisionlessParticles dark_matter;
+  double box = 0.0;
+  double a = 0.0;
+};
+CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Units& units);
+
+// The linear density contrast at z = 0 (D = 1) the box is made from, as Fourier coefficients:
+// each cell's white noise, transformed, times sqrt(P(k) / (L/N)^3).
+SpectralField linear_density(const CosmologicalBoxParams& p);
+
+}  // namespace fountain::ics

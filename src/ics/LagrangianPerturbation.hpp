@@ -1,0 +1,40 @@
+// First- and second-order Lagrangian perturbation theory on a periodic grid: displacement fields from a linear density field.
+#pragma once
+#include <array>
+#include <complex>
+#include <vector>
+
+namespace fountain::ics {
+
+// A real field's Fourier coefficients on an N^3 grid in a box of side L, in FFTW's
+// real-to-complex layout (N x N x (N/2 + 1), coefficient of cell index m: sum over cells n of
+// f_n exp(-2 pi i m.n / N)). Modes with an index N/2 are kept at zero.
+struct SpectralField {
+  int n = 0;
+  double box = 1.0;
+  std::vector<std::complex<double>> values;
+
+  std::size_t index(int i, int j, int k) const {
+    return (static_cast<std::size_t>(i) * static_cast<std::size_t>(n) + static_cast<std::size_t>(j)) *
+               static_cast<std::size_t>(n / 2 + 1) + static_cast<std::size_t>(k);
+  }
+  // The wave number of index i along an axis (2 pi / L times the signed mode).
+  double wave(int i) const;
+  bool nyquist(int i, int j, int k) const { return i == n / 2 || j == n / 2 || k == n / 2; }
+};
+
+// The coefficients of a real N^3 grid (cell (i, j, k) at (i N + j) N + k).
+SpectralField forward_transform(const std::vector<double>& grid, int n, double box);
+
+// Real displacement fields (one N^3 grid per component) at the cell positions shifted by
+// `shift` cells along each axis (0: the cells; 0.5: the cells' far corners, where the gas sits).
+struct Displacements {
+  std::array<std::vector<double>, 3> first;   // psi1 = -grad phi1, lap phi1 = delta
+  std::array<std::vector<double>, 3> second;  // grad phi2, lap phi2 = sum_{i<j} phi1,ii phi1,jj - phi1,ij^2 (empty at order 1)
+};
+
+// Zel'dovich (order 1) or 2LPT (order 2) displacements of the linear density `delta` (at
+// D = 1): positions are q + D psi1 + D2 grad phi2.
+Displacements lagrangian_displacements(const SpectralField& delta, int order, double shift);
+
+}  // namespace fountain::ics
