@@ -320,8 +320,8 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
   const double unit_inv = 1.0 / length_unit_;
   const double field = config.G * root.mass * unit_inv * unit_inv;
   const double accel_unit = field > 0.0 && std::isfinite(field) ? std::ldexp(1.0, std::ilogb(field)) : 1.0;
-  const std::unique_ptr<const ShortRangeTable> short_range =
-      config.split.enabled() ? std::make_unique<const ShortRangeTable>(config.split, length_unit_) : nullptr;
+  const std::unique_ptr<const ShortRangeSplit> short_range =
+      config.split.enabled() ? std::make_unique<const ShortRangeSplit>(config.split, length_unit_) : nullptr;
   // Each group is walked and evaluated alone, so groups may go in parallel: a target's answer
   // depends only on its group.
   auto walk_and_evaluate_targets = [&](std::size_t begin, std::size_t count) {

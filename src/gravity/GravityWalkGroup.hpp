@@ -1,6 +1,8 @@
 // The walk's private working set: a group of targets, its interaction list, and the short-range factors of TreePM.
 #pragma once
+#include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -14,7 +16,7 @@ namespace fountain::gravity {
 // longer lists, as each node is judged from the group's box rather than from one point.
 constexpr int kGroupSize = GravityTree::kGroupSize;
 
-struct ShortRangeTable;
+struct ShortRangeSplit;
 
 struct GravityTree::Group {
   int n = 0;
@@ -35,7 +37,7 @@ struct GravityTree::Group {
   double h_min = 0.0;     // the smallest
   double a_crit = 0.0;    // alpha_force times the smallest |a_old|
   bool relative = true;   // false if any target lacks |a_old|: Barnes-Hut for the group
-  const ShortRangeTable* short_range = nullptr;  // TreePM: the split's factors; null: the whole force
+  const ShortRangeSplit* short_range = nullptr;  // TreePM: the split; null: the whole force
 };
 
 // What one walk accepted. Nodes and particles are split by whether the Newtonian force holds
@@ -75,30 +77,50 @@ inline FloatUnits float_units(int targets, double length_unit, double accel_unit
   return f;
 }
 
-// The TreePM short-range factors g_n(u), u = r / (2 r_s), of GravitySplit (force_factor is
-// g_1, potential_factor g_0, then the second and third derivatives' factors), tabulated in
-// float on [0, u_cut] for the walk's float loops (linear interpolation, error ~1e-7, below
-// float's own), and 0 beyond the cut-off, as the short range is there.
-struct ShortRangeTable {
-  static constexpr int kBins = 2048;
-  float u_per_length = 0.0f;  // 1 / (2 r_s), in the tree's float length unit
-  float bins_per_u = 0.0f;
-  float u_cut = 0.0f;
-  std::array<float, kBins + 2> g0{}, g1{}, g2{}, g3{};
+// exp(x) for -88 < x <= 0 in float, branch-free so that loops over lanes vectorise: x / ln 2
+// split into a whole n and a rest r in (-1/2, 1/2], 2^r by its Taylor series to r^7 (error
+// 5e-9), 2^n put together from its exponent bits. Relative error ~1e-7, as float's own.
+inline float exp_negative(float x) {
+  const float z = x * 1.44269504f;
+  const int n = static_cast<int>(z - 0.5f);  // truncation of a value <= -1/2 rounds it up
+  const float y = (z - static_cast<float>(n)) * 0.693147181f;
+  const float p =
+      1.0f + y * (1.0f + y * (0.5f + y * (1.0f / 6.0f + y * (1.0f / 24.0f + y * (1.0f / 120.0f +
+                                                                                      y * (1.0f / 720.0f + y * (1.0f / 5040.0f)))))));
+  return p * std::bit_cast<float>((n + 127) << 23);
+}
 
-  ShortRangeTable(const GravitySplit& split, double length_unit) {
-    const double u_cut_d = split.cutoff_radius() / (2.0 * split.r_s);
-    u_per_length = static_cast<float>(length_unit / (2.0 * split.r_s));
-    bins_per_u = static_cast<float>(kBins / u_cut_d);
-    u_cut = static_cast<float>(u_cut_d);
-    for (int i = 0; i <= kBins + 1; ++i) {
-      const double r = 2.0 * split.r_s * u_cut_d * i / kBins;
-      g0[static_cast<std::size_t>(i)] = static_cast<float>(split.potential_factor(r));
-      g1[static_cast<std::size_t>(i)] = static_cast<float>(split.force_factor(r));
-      g2[static_cast<std::size_t>(i)] = static_cast<float>(split.second_derivative_factor(r));
-      g3[static_cast<std::size_t>(i)] = static_cast<float>(split.third_derivative_factor(r));
-    }
-  }
+// The TreePM short-range factors g_n(u), u = r / (2 r_s), of GravitySplit in float (force_factor
+// is g_1, potential_factor g_0, then the second and third derivatives' factors), with erfc by
+// Numerical Recipes' Chebyshev fit (relative error below 1.2e-7): no table, so the walk's loops
+// over targets vectorise. u is clamped at the cut-off, beyond which the callers drop the pair.
+struct ShortRangeFactors {
+  float g0, g1, g2, g3;
+};
+inline ShortRangeFactors short_range_factors(float u, float u_cut) {
+  u = std::min(u, u_cut);
+  const float t = 1.0f / (1.0f + 0.5f * u);
+  const float u2 = u * u;
+  const float erfc =
+      t * exp_negative(-u2 - 1.26551223f +
+                       t * (1.00002368f +
+                            t * (0.37409196f +
+                                 t * (0.09678418f +
+                                      t * (-0.18628806f +
+                                           t * (0.27886807f +
+                                                t * (-1.13520398f + t * (1.48851587f + t * (-0.82215223f + t * 0.17087277f)))))))));
+  const float c = 0.564189584f * u * exp_negative(-u2);  // u exp(-u^2) / sqrt(pi)
+  return {erfc, erfc + 2.0f * c, erfc + c * (2.0f + (4.0f / 3.0f) * u2),
+          erfc + c * (2.0f + u2 * (4.0f / 3.0f + (8.0f / 15.0f) * u2))};
+}
+
+// The walk's view of a TreePM split: u per float length unit and the cut-off in u.
+struct ShortRangeSplit {
+  float u_per_length = 0.0f;  // 1 / (2 r_s), in the tree's float length unit
+  float u_cut = 0.0f;
+  ShortRangeSplit(const GravitySplit& split, double length_unit)
+      : u_per_length(static_cast<float>(length_unit / (2.0 * split.r_s))),
+        u_cut(static_cast<float>(split.cutoff_radius() / (2.0 * split.r_s))) {}
 };
 
 }  // namespace fountain::gravity

@@ -8,17 +8,6 @@
 
 namespace fountain::gravity {
 
-namespace {
-
-// Linear interpolation of a table at t = u * bins_per_u, clamped to the table.
-inline float lookup(const float* table, float t) {
-  const float c = std::min(t, float(ShortRangeTable::kBins) - 0.5f);
-  const int i = static_cast<int>(c);
-  const float f = c - static_cast<float>(i);
-  return table[i] + f * (table[i + 1] - table[i]);
-}
-
-}  // namespace
 
 // As evaluate_group, in the same float units, with each pair's Newtonian (or softened)
 // derivatives scaled by the split: the potential by g0, the force by g1, and in a node's
@@ -28,17 +17,13 @@ inline float lookup(const float* table, float t) {
 // add nothing. Offsets are nearest images.
 FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, const WalkConfig& config,
                                                                      const InteractionList& list) const {
-  const ShortRangeTable& table = *g.short_range;
+  const ShortRangeSplit& split = *g.short_range;
   const int nt = g.n;
   const auto [lanes, unit_inv, gm_scale, q_scale, pot_unit] = float_units(nt, length_unit_, g.accel_unit);
   const double G = config.G;
   const bool quadrupole = config.expansion == MultipoleOrder::quadrupole;
-  const float t_per_length = table.u_per_length * table.bins_per_u;
-  const float r_cut = table.u_cut / table.u_per_length;
-  const float* g0 = table.g0.data();
-  const float* g1 = table.g1.data();
-  const float* g2 = table.g2.data();
-  const float* g3 = table.g3.data();
+  const float u_per_length = split.u_per_length, u_cut = split.u_cut;
+  const float r_cut = u_cut / u_per_length;
   auto offset = [&](const Vec3& x) {
     return std::array<float, 3>{static_cast<float>(image(x.x - g.centre.x) * unit_inv),
                                 static_cast<float>(image(x.y - g.centre.y) * unit_inv),
@@ -58,9 +43,8 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
       const float r2 = dx * dx + dy * dy + dz * dz;
       const float r = std::sqrt(r2);
       const float inside = r < r_cut ? 1.0f : 0.0f;
-      const float tu = r * t_per_length;
-      const float f0 = inside * lookup(g0, tu), f1 = inside * lookup(g1, tu), f2 = inside * lookup(g2, tu),
-                  f3 = inside * lookup(g3, tu);
+      const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
+      const float f0 = inside * g_n.g0, f1 = inside * g_n.g1, f2 = inside * g_n.g2, f3 = inside * g_n.g3;
       const float r_inv = 1.0f / r;
       const float r2_inv = r_inv * r_inv;
       const float r3_inv = r_inv * r2_inv;
@@ -86,13 +70,13 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
       const float r2 = dx * dx + dy * dy + dz * dz;
       const float r = std::sqrt(r2);
       const float inside = r < r_cut ? gm : 0.0f;
-      const float tu = r * t_per_length;
+      const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
       const float r_inv = 1.0f / r;
-      const float s = inside * lookup(g1, tu) * (r_inv * r_inv * r_inv);
+      const float s = inside * g_n.g1 * (r_inv * r_inv * r_inv);
       ax[t] -= s * dx;
       ay[t] -= s * dy;
       az[t] -= s * dz;
-      pot[t] -= inside * lookup(g0, tu) * r_inv;
+      pot[t] -= inside * g_n.g0 * r_inv;
     }
   }
   // Near particles: the spline-softened pair (softening is far below r_s) times the factors;
@@ -114,13 +98,13 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
       const float gm_pull = r2 + h != 0.0f ? gm_other : 0.0f;
       const float r = gm_pull != 0.0f ? std::sqrt(r2) : 1.0f;
       const float gm_in = r < r_cut ? gm_pull : 0.0f;
-      const float tu = r * t_per_length;
+      const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
       const auto f = softened_pair_branch_free(r, h, pair_inverse_spline_length(g.spline_inv[t], h_inv_k));
-      const float s = gm_in * lookup(g1, tu) * f.force;
+      const float s = gm_in * g_n.g1 * f.force;
       ax[t] -= s * dx;
       ay[t] -= s * dy;
       az[t] -= s * dz;
-      pot[t] += gm_in * lookup(g0, tu) * f.potential;
+      pot[t] += gm_in * g_n.g0 * f.potential;
     }
   }
   for (int t = 0; t < nt; ++t) {
