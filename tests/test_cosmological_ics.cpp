@@ -4,6 +4,8 @@
 #include <fftw3.h>
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <complex>
 #include <numbers>
 #include <vector>
@@ -124,13 +126,13 @@ TEST(CosmologicalIcs, SecondOrderDisplacementsOfTwoWavesAreExact) {
   }
 }
 
-// The particles' own power spectrum (CIC on a mesh twice as fine, divided by the assignment
+// The particles' own power spectrum (64^3 in 256 Mpc/h; CIC on a mesh twice as fine, divided by the assignment
 // window) against the input field's realised power scaled to the starting time, per shell of
 // width k_f up to half the particles' Nyquist wave number: within 5%.
 TEST(CosmologicalIcs, ParticlesCarryTheInputPowerSpectrum) {
   ics::CosmologicalBoxParams p;
-  p.level = 5;
-  p.box = 128.0;
+  p.level = 6;
+  p.box = 256.0;
   p.a_start = 0.02;
   p.seed = 3;
   p.cosmology = {0.3, 0.7, 0.03, 0.6};
@@ -186,7 +188,13 @@ TEST(CosmologicalIcs, ParticlesCarryTheInputPowerSpectrum) {
         got[shell] += m * m;
         want[shell] += std::norm(input.values[input.index(i, j, k)]) * growth * growth;
       }
-  for (int s = 1; s <= shells; ++s) EXPECT_NEAR(got[s] / want[s], 1.0, 0.05) << "shell " << s << " of " << kf;
+  double worst = 0.0;
+  for (int s = 1; s <= shells; ++s) {
+    EXPECT_NEAR(got[s] / want[s], 1.0, 0.05) << "shell " << s << " of " << kf;
+    worst = std::max(worst, std::fabs(got[s] / want[s] - 1.0));
+  }
+  std::printf("64^3 in 256 Mpc/h: particle power over input power within %.2f%% in %d shells\n", 100.0 * worst,
+              shells);
   // Generating again gives the same bits.
   const ics::CosmologicalBox again = ics::make_cosmological_box(p, Units{});
   EXPECT_EQ(again.dark_matter.x, box.dark_matter.x);
