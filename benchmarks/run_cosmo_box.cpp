@@ -61,8 +61,15 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   std::map<std::string, double> kind_s;
   double updates = 0, busy = 0;
   const auto t1 = std::chrono::steady_clock::now();
+  double next_report = 60.0;
   while (!e.finished()) {
     const StepInfo s = e.step();
+    // A line a minute on stderr, so that a long run shows how far it is.
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    if (elapsed >= next_report) {
+      fmt::print(stderr, "{:.0f} s: step {}, a = {:.4f}\n", elapsed, e.steps(), std::exp(e.time()));
+      next_report += 60.0;
+    }
     updates += static_cast<double>(s.active);
     busy += s.tasks_busy_s;
     const auto& records = e.last_records();

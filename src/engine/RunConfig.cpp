@@ -37,6 +37,11 @@ void read_comoving(const ParameterFile& p, RunConfig& c) {
                                    std::string_view(key) == "output.delta_time"
                                        ? "output.scale_factors or output.redshifts"
                                        : "cosmology.a_begin and cosmology.a_end"));
+  // The statistics' phases and energies are physical quantities of plain runs.
+  if (p.integer("output.statistics_every") > 0)
+    throw InputError(fmt::format("{}: the statistics file is not yet written in comoving runs (its phases and "
+                                 "energies would be of comoving variables); set it to 0",
+                                 p.where("output.statistics_every")));
   cc.cosmology.omega_m = p.real("cosmology.omega_m");
   cc.cosmology.omega_lambda = p.real("cosmology.omega_lambda");
   cc.cosmology.omega_b = p.real("cosmology.omega_b");

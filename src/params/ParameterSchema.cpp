@@ -99,7 +99,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       integer("output.dump_timeline_every", "0", 0, 1e15,
               "Write a per-task timeline (CSV) every this many steps; 0 never."),
       integer("output.statistics_every", "0", 0, 1e15,
-              "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never."),
+              "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never. Not yet in comoving runs."),
       // restart
       integer("restart.every_steps", "0", 0, 1e15,
               "A restart file <output.directory>/restart.hdf5 falls due every this many steps; it is written at the next recut of the cells after that (a few to a few tens of steps later, so writing it changes nothing in the run; if none comes within 1000 steps the cells are recut for it). The first is written at the start. 0: never (SIGTERM always writes one)."),
