@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <exception>
+#include <fstream>
+#include <string>
 
 #include "tasks/MpiSession.hpp"
 
@@ -19,6 +21,13 @@ int main_reporting_errors(int argc, char** argv, Run&& run) {
     fmt::print(stderr, "error: {}\n", e.what());
     return 1;
   }
+}
+
+// Rank 0 prints a run's JSON line and, when a path is given, writes it there too.
+inline void report_json(const tasks::MpiSession& mpi, const std::string& json, const std::string& path) {
+  if (mpi.rank() != 0) return;
+  fmt::print("{}", json);
+  if (!path.empty()) std::ofstream(path) << json;
 }
 
 }  // namespace fountain::bench

@@ -93,10 +93,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
       "\"peak_rss_bytes_per_particle\": {:.1f}}}\n",
       per_side, n, box, z_start, a_end, max_dln_a, e.threads(), setup, wall, e.steps(), updates, kinds,
       wall * e.threads() - busy, static_cast<double>(ru.ru_maxrss) * 1024.0 / static_cast<double>(n));
-  if (mpi.rank() == 0) {
-    fmt::print("{}", json);
-    if (!json_path.empty()) std::ofstream(json_path) << json;
-  }
+  bench::report_json(mpi, json, json_path);
   return 0;
 }
 }  // namespace

@@ -152,10 +152,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
       "{}, {}}}\n",
       problem, criterion, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
       tasks_wall > 0 ? tasks_busy / (tasks_wall * e.threads()) : 0.0, peak_bytes / static_cast<double>(n), accuracy, ranks);
-  if (mpi.rank() == 0) {
-    fmt::print("{}", json);
-    if (!json_path.empty()) std::ofstream(json_path) << json;
-  }
+  bench::report_json(mpi, json, json_path);
   return 0;
 }
 }  // namespace

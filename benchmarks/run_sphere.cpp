@@ -127,10 +127,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
       thread_time - tasks_busy, tasks_wall > 0 ? tasks_busy / thread_time : 0.0,
       static_cast<double>(ru.ru_maxrss) * 1024.0 / static_cast<double>(n),
       bench::rank_fields(e, counters, e.steps() - steps_before, wall, tasks_busy));
-  if (mpi.rank() == 0) {
-    fmt::print("{}", json);
-    if (!json_path.empty()) std::ofstream(json_path) << json;
-  }
+  bench::report_json(mpi, json, json_path);
   return 0;
 }
 }  // namespace
