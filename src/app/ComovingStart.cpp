@@ -12,8 +12,8 @@ namespace fountain {
 
 namespace {
 
-constexpr double kMpcCgs = 3.0856775814913673e24;
-constexpr double kSolarMassCgs = 1.988409870698051e33;
+// GADGET's file units where neither the parameters nor the file say: Mpc/h, 1e10 Msun/h, km/s.
+constexpr Units kMpcMsunKms{};
 
 bool agrees(double a, double b) { return std::fabs(a - b) <= 1e-6 * std::max(std::fabs(a), std::fabs(b)); }
 
@@ -62,9 +62,9 @@ void to_comoving_variables(io::InitialConditions& ic, RunConfig& config, const P
     return given > 0.0 ? given : in_file > 0.0 ? in_file : fallback;
   };
   const double h = cc.files.h_scaled ? 1.0 : cc.cosmology.hubble_param;
-  const double length = pick(f.length_cgs, ic.units.length_cgs, kMpcCgs) * h / units.length_cgs;
-  const double mass = pick(f.mass_cgs, ic.units.mass_cgs, 1e10 * kSolarMassCgs) * h / units.mass_cgs;
-  const double velocity = pick(f.velocity_cgs, ic.units.velocity_cgs, 1e5) / units.velocity_cgs;
+  const double length = pick(f.length_cgs, ic.units.length_cgs, kMpcMsunKms.length_cgs) * h / units.length_cgs;
+  const double mass = pick(f.mass_cgs, ic.units.mass_cgs, 1e10 * kMpcMsunKms.mass_cgs) * h / units.mass_cgs;
+  const double velocity = pick(f.velocity_cgs, ic.units.velocity_cgs, kMpcMsunKms.velocity_cgs) / units.velocity_cgs;
   const double a = cc.a_begin;
   // v' = a^2 dx/dt = a v_pec: GADGET's files hold v_pec / sqrt(a).
   const double v_factor = velocity * (f.gadget_velocities ? a * std::sqrt(a) : a);

@@ -8,7 +8,6 @@
 
 namespace fountain::gravity {
 
-
 // As evaluate_group, in the same float units, with each pair's Newtonian (or softened)
 // derivatives scaled by the split: the potential by g0, the force by g1, and in a node's
 // quadrupole term the second and third derivatives by g2 and g3. The truncated potential is
