@@ -45,6 +45,12 @@ constexpr double kSoftenedNodeAngle = 0.5;
 // Every test is the one-target test applied to the nearest point of the group's box, so a
 // group of one decides exactly as a single target would, and each target of a larger group
 // meets every criterion at least as strictly as it would alone.
+inline double GravityTree::box_distance2(const Group& g, const Vec3& x) const {
+  const double px = gap(image(x.x - g.centre.x), g.half.x), py = gap(image(x.y - g.centre.y), g.half.y),
+               pz = gap(image(x.z - g.centre.z), g.half.z);
+  return px * px + py * py + pz * pz;
+}
+
 void GravityTree::walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const {
   list.clear();
   const double theta2 = config.theta * config.theta;
@@ -102,18 +108,23 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     } else if (node.first_child >= 0) {
       n = node.first_child;
     } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
-      // Decided for the whole leaf, so its particles need no test of their own.
+      // Decided for the whole leaf, so its particles need no test of their own, but for the
+      // short range's cut-off, which drops a leaf's particles beyond it from the whole box.
       auto& to = bulk == Bulk::far ? list.far : list.near;
-      const std::size_t at = to.size();
-      to.resize(at + static_cast<std::size_t>(node.count));
-      std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
+      if (config.split.enabled()) {
+        for (std::int32_t k = node.first; k < node.first + node.count; ++k)
+          if (box_distance2(g, pos_[k]) <= cutoff * cutoff) to.push_back(k);
+      } else {
+        const std::size_t at = to.size();
+        to.resize(at + static_cast<std::size_t>(node.count));
+        std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
+      }
       n = node.next;
     } else {
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        const double px = gap(image(pos_[k].x - g.centre.x), g.half.x), py = gap(image(pos_[k].y - g.centre.y), g.half.y),
-                     pz = gap(image(pos_[k].z - g.centre.z), g.half.z);
         const double hp = std::max(g.h_max, spline_[k]);
-        const double d2 = px * px + py * py + pz * pz;
+        const double d2 = box_distance2(g, pos_[k]);
+        if (config.split.enabled() && d2 > cutoff * cutoff) continue;
         // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
         (d2 > 0.0 && d2 >= hp * hp ? list.far : list.near).push_back(k);
       }
@@ -387,7 +398,8 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
       r.acceleration = {g.ax[t], g.ay[t], g.az[t]};
       r.potential = g.pot[t];
       r.node_interactions = static_cast<std::int64_t>(list.nodes.size() + list.soft_nodes.size());
-      r.particle_interactions = static_cast<std::int64_t>(list.far.size() + list.near.size()) - g.own[t];
+      r.particle_interactions = g.short_range ? g.kept[t]
+                                              : static_cast<std::int64_t>(list.far.size() + list.near.size()) - g.own[t];
     }
   };
   // Periodic: a group's nearest images are taken from its centre, which is every target's

@@ -28,6 +28,7 @@ struct GravityTree::Group {
   float xr[kGroupSize], yr[kGroupSize], zr[kGroupSize], spline[kGroupSize], spline_inv[kGroupSize];
   float self_hi[kGroupSize], self_lo[kGroupSize];
   int own[kGroupSize];    // 1 if the target's own particle is on the near list (not an interaction)
+  int kept[kGroupSize];   // TreePM: the particle pairs within the cut-off, per target
   Vec3 centre, half;      // the box around the targets' positions
   // The float loops' unit of acceleration: a power of two near the whole tree's G M / unit^2,
   // so that accelerations, and the quadrupole products on the way, stay far from float's

@@ -1,12 +1,79 @@
 // The walk's lists evaluated with the TreePM short-range factors: the tree's half of periodic gravity (docs/gravity.md, "Periodic TreePM").
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
+#include <cstdint>
+#include <vector>
 
 #include "core/VectorClones.hpp"
 #include "gravity/GravityTree.hpp"
 #include "gravity/GravityWalkGroup.hpp"
 
 namespace fountain::gravity {
+
+namespace {
+
+// Sources per step of a target's particle loops (AVX2's float width).
+constexpr int kSourceLanes = 8;
+
+// One group's particle sources in its float frame (nearest images taken once per group), and
+// one target's sources within the cut-off. A sentinel of no mass after the sources pads the
+// kept list to whole steps of kSourceLanes.
+struct ParticleSources {
+  std::vector<float> x, y, z, gm, h, h_inv, key_hi, key_lo;
+  std::vector<std::int32_t> kept;
+  // The kept sources' fields, contiguous so that the pair loops vectorise.
+  std::vector<float> kx, ky, kz, kgm, kh, kh_inv, kkey_hi, kkey_lo;
+  int count = 0, kept_count = 0;
+
+  template <class Source>
+  void gather(const std::vector<std::int32_t>& list, Source&& source) {
+    count = static_cast<int>(list.size());
+    const std::size_t n = list.size() + 1;
+    for (auto* v : {&x, &y, &z, &gm, &h, &h_inv, &key_hi, &key_lo}) v->resize(n);
+    kept.resize(list.size() + kSourceLanes);
+    for (auto* v : {&kx, &ky, &kz, &kgm, &kh, &kh_inv, &kkey_hi, &kkey_lo}) v->resize(list.size() + kSourceLanes);
+    for (std::size_t i = 0; i < list.size(); ++i) source(list[i], i);
+    gm[list.size()] = 0.0f;
+    h[list.size()] = 0.0f;
+    h_inv[list.size()] = FLT_MAX;
+    const IndexKey none = index_key(-1);
+    key_hi[list.size()] = none.hi;
+    key_lo[list.size()] = none.lo;
+  }
+
+  // The sources with squared distance below r_cut2 from the target, in list order, padded by
+  // the sentinel placed `away` from the target (so that its pair stays finite): the padded
+  // count. kept_count is the unpadded one.
+  int keep_within(float xt, float yt, float zt, float r_cut2, float away) {
+    x[static_cast<std::size_t>(count)] = xt + away;
+    y[static_cast<std::size_t>(count)] = yt;
+    z[static_cast<std::size_t>(count)] = zt;
+    int m = 0;
+    for (int k = 0; k < count; ++k) {
+      const float dx = xt - x[static_cast<std::size_t>(k)], dy = yt - y[static_cast<std::size_t>(k)],
+                  dz = zt - z[static_cast<std::size_t>(k)];
+      kept[static_cast<std::size_t>(m)] = k;
+      m += dx * dx + dy * dy + dz * dz < r_cut2 ? 1 : 0;
+    }
+    kept_count = m;
+    while (m % kSourceLanes != 0) kept[static_cast<std::size_t>(m++)] = count;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) {
+      const auto k = static_cast<std::size_t>(kept[i]);
+      kx[i] = x[k];
+      ky[i] = y[k];
+      kz[i] = z[k];
+      kgm[i] = gm[k];
+      kh[i] = h[k];
+      kh_inv[i] = h_inv[k];
+      kkey_hi[i] = key_hi[k];
+      kkey_lo[i] = key_lo[k];
+    }
+    return m;
+  }
+};
+
+}  // namespace
 
 // As evaluate_group, in the same float units, with each pair's Newtonian (or softened)
 // derivatives scaled by the split: the potential by g0, the force by g1, and in a node's
@@ -61,57 +128,87 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
       pot[t] += -gm * f0 * r_inv + d2 * dqd * (1.0f / 6.0f) + trace * (d2 * r2 * (1.0f / 6.0f) + 0.5f * d1);
     }
   }
-  for (const std::int32_t k : list.far) {
-    const auto [px, py, pz] = offset(pos_[k]);
-    const float gm = static_cast<float>(G * mass_[k] * gm_scale);
-    for (int t = 0; t < lanes; ++t) {
-      const float dx = g.xr[t] - px, dy = g.yr[t] - py, dz = g.zr[t] - pz;
-      const float r2 = dx * dx + dy * dy + dz * dz;
-      const float r = std::sqrt(r2);
-      const float inside = r < r_cut ? gm : 0.0f;
-      const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
-      const float r_inv = 1.0f / r;
-      const float s = inside * g_n.g1 * (r_inv * r_inv * r_inv);
-      ax[t] -= s * dx;
-      ay[t] -= s * dy;
-      az[t] -= s * dz;
-      pot[t] -= inside * g_n.g0 * r_inv;
+  // Particles: one group's list reaches every source within r_cut of any of its targets,
+  // several times the ~(4/3) pi r_cut^3 n each target needs, so each target keeps its own
+  // sources (in list order) before the factors are computed, eight at a time over sources.
+  // Dropped pairs are those beyond the cut-off, which add nothing.
+  thread_local ParticleSources far, near;
+  auto particle_source = [&](ParticleSources& into) {
+    return [&, this](std::int32_t k, std::size_t i) {
+      const auto [px, py, pz] = offset(pos_[k]);
+      into.x[i] = px;
+      into.y[i] = py;
+      into.z[i] = pz;
+      into.gm[i] = static_cast<float>(G * mass_[k] * gm_scale);
+      into.h[i] = spline_f_[k];
+      into.h_inv[i] = spline_inv_f_[k];
+      const IndexKey key = index_key(index_[k]);
+      into.key_hi[i] = key.hi;
+      into.key_lo[i] = key.lo;
+    };
+  };
+  far.gather(list.far, particle_source(far));
+  near.gather(list.near, particle_source(near));
+  const float r_cut2 = r_cut * r_cut;
+  for (int t = 0; t < nt; ++t) {
+    const float xt = g.xr[t], yt = g.yr[t], zt = g.zr[t];
+    float sum_x[kSourceLanes] = {}, sum_y[kSourceLanes] = {}, sum_z[kSourceLanes] = {}, sum_pot[kSourceLanes] = {};
+    const int n_far = far.keep_within(xt, yt, zt, r_cut2, 2.0f * r_cut);
+    for (int k0 = 0; k0 < n_far; k0 += kSourceLanes)
+      for (int l = 0; l < kSourceLanes; ++l) {
+        const auto k = static_cast<std::size_t>(k0 + l);
+        const float dx = xt - far.kx[k], dy = yt - far.ky[k], dz = zt - far.kz[k];
+        const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
+        const float r_inv = 1.0f / r;
+        const float s = far.kgm[k] * g_n.g1 * (r_inv * r_inv * r_inv);
+        sum_x[l] -= s * dx;
+        sum_y[l] -= s * dy;
+        sum_z[l] -= s * dz;
+        sum_pot[l] -= far.kgm[k] * g_n.g0 * r_inv;
+      }
+    // Near particles: the spline-softened pair (softening is far below r_s) times the
+    // factors; a target's own particle and unsoftened coincident ones add exact zeros, as in
+    // evaluate_group.
+    const IndexKey self{g.self_hi[t], g.self_lo[t]};
+    const float h_t = g.spline[t], h_inv_t = g.spline_inv[t];
+    float owned[kSourceLanes] = {};
+    const int n_near = near.keep_within(xt, yt, zt, r_cut2, 2.0f * r_cut);
+    for (int k0 = 0; k0 < n_near; k0 += kSourceLanes)
+      for (int l = 0; l < kSourceLanes; ++l) {
+        const auto k = static_cast<std::size_t>(k0 + l);
+        const float key_diff = std::fabs(near.kkey_hi[k] - self.hi) + std::fabs(near.kkey_lo[k] - self.lo);
+        owned[l] += key_diff != 0.0f ? 0.0f : 1.0f;
+        const float dx = xt - near.kx[k], dy = yt - near.ky[k], dz = zt - near.kz[k];
+        const float r2 = dx * dx + dy * dy + dz * dz;
+        const float h = std::max(h_t, near.kh[k]);
+        const float gm_other = key_diff != 0.0f ? near.kgm[k] : 0.0f;
+        const float gm_pull = r2 + h != 0.0f ? gm_other : 0.0f;
+        const float r = gm_pull != 0.0f ? std::sqrt(r2) : 1.0f;
+        const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
+        const auto f = softened_pair_branch_free(r, h, pair_inverse_spline_length(h_inv_t, near.kh_inv[k]));
+        const float s = gm_pull * g_n.g1 * f.force;
+        sum_x[l] -= s * dx;
+        sum_y[l] -= s * dy;
+        sum_z[l] -= s * dz;
+        sum_pot[l] += gm_pull * g_n.g0 * f.potential;
+      }
+    for (int l = 0; l < kSourceLanes; ++l) {
+      ax[t] += sum_x[l];
+      ay[t] += sum_y[l];
+      az[t] += sum_z[l];
+      pot[t] += sum_pot[l];
     }
-  }
-  // Near particles: the spline-softened pair (softening is far below r_s) times the factors;
-  // a target's own particle and unsoftened coincident ones add exact zeros, as in
-  // evaluate_group.
-  float owned[kGroupSize] = {};
-  for (const std::int32_t k : list.near) {
-    const auto [px, py, pz] = offset(pos_[k]);
-    const float gm = static_cast<float>(G * mass_[k] * gm_scale);
-    const float h_k = spline_f_[k], h_inv_k = spline_inv_f_[k];
-    const IndexKey source = index_key(index_[k]);
-    for (int t = 0; t < lanes; ++t) {
-      const float key_diff = std::fabs(source.hi - g.self_hi[t]) + std::fabs(source.lo - g.self_lo[t]);
-      owned[t] += key_diff != 0.0f ? 0.0f : 1.0f;
-      const float dx = g.xr[t] - px, dy = g.yr[t] - py, dz = g.zr[t] - pz;
-      const float r2 = dx * dx + dy * dy + dz * dz;
-      const float h = std::max(g.spline[t], h_k);
-      const float gm_other = key_diff != 0.0f ? gm : 0.0f;
-      const float gm_pull = r2 + h != 0.0f ? gm_other : 0.0f;
-      const float r = gm_pull != 0.0f ? std::sqrt(r2) : 1.0f;
-      const float gm_in = r < r_cut ? gm_pull : 0.0f;
-      const ShortRangeFactors g_n = short_range_factors(r * u_per_length, u_cut);
-      const auto f = softened_pair_branch_free(r, h, pair_inverse_spline_length(g.spline_inv[t], h_inv_k));
-      const float s = gm_in * g_n.g1 * f.force;
-      ax[t] -= s * dx;
-      ay[t] -= s * dy;
-      az[t] -= s * dz;
-      pot[t] += gm_in * g_n.g0 * f.potential;
-    }
+    float own_count = 0.0f;
+    for (int l = 0; l < kSourceLanes; ++l) own_count += owned[l];
+    g.own[t] = own_count > 0.0f ? 1 : 0;
+    g.kept[t] = far.kept_count + near.kept_count - g.own[t];
   }
   for (int t = 0; t < nt; ++t) {
     g.ax[t] = static_cast<double>(ax[t]) * g.accel_unit;
     g.ay[t] = static_cast<double>(ay[t]) * g.accel_unit;
     g.az[t] = static_cast<double>(az[t]) * g.accel_unit;
     g.pot[t] = static_cast<double>(pot[t]) * pot_unit;
-    g.own[t] = owned[t] > 0.0f ? 1 : 0;
   }
 }
 
