@@ -42,6 +42,10 @@ inline Bulk classify_leaf(const Vec3& box_half, double h_max, const TreeNode& le
 // test, 4.8e-3 with this cap, as without softened nodes at all; docs/gravity.md).
 constexpr double kSoftenedNodeAngle = 0.5;
 
+// TreePM: a node of at most this many particles that the criterion opens gives its particles
+// directly (docs/gravity.md, "Periodic TreePM").
+constexpr std::int32_t kDirectNodeSize = 32;
+
 // Every test is the one-target test applied to the nearest point of the group's box, so a
 // group of one decides exactly as a single target would, and each target of a larger group
 // meets every criterion at least as strictly as it would alone.
@@ -60,6 +64,16 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   // Above the rounding of any gap computed inside the root cube.
   const double slack = 1e-12 * (nodes_[0].side + std::fabs(nodes_[0].centre.x) + std::fabs(nodes_[0].centre.y) +
                                 std::fabs(nodes_[0].centre.z));
+  // Each of a node's particles, tested alone.
+  auto add_particles = [&](const TreeNode& node) {
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+      const double hp = std::max(g.h_max, spline_[k]);
+      const double d2 = box_distance2(g, pos_[k]);
+      if (config.split.enabled() && d2 > cutoff * cutoff) continue;
+      // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
+      (d2 > 0.0 && d2 >= hp * hp ? list.far : list.near).push_back(k);
+    }
+  };
   std::int32_t n = 0;
   while (n >= 0) {
     const TreeNode& node = nodes_[n];
@@ -105,6 +119,11 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     if (accept) {
       (beyond ? list.nodes : list.soft_nodes).push_back(n);
       n = node.next;
+    } else if (node.first_child >= 0 && config.split.enabled() && node.count <= kDirectNodeSize) {
+      // The short range at high redshift opens nearly every node within the cut-off down to
+      // its leaves; a small node's particles are listed at once instead (each exact).
+      add_particles(node);
+      n = node.next;
     } else if (node.first_child >= 0) {
       n = node.first_child;
     } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
@@ -121,13 +140,7 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
       }
       n = node.next;
     } else {
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        const double hp = std::max(g.h_max, spline_[k]);
-        const double d2 = box_distance2(g, pos_[k]);
-        if (config.split.enabled() && d2 > cutoff * cutoff) continue;
-        // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
-        (d2 > 0.0 && d2 >= hp * hp ? list.far : list.near).push_back(k);
-      }
+      add_particles(node);
       n = node.next;
     }
   }
