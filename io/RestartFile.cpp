@@ -101,9 +101,9 @@ Particles read_particles(const hdf5::File& f, const std::string& path, const std
 }
 
 std::string scalars_checksum_text(const RestartState& s) {
-  std::string text = fmt::format("{} {} {} {} {} {} {} {:a} {}", s.ti_current, s.ti_step_begin, s.steps,
+  std::string text = fmt::format("{} {} {} {} {} {} {} {:a} {} {} {}", s.ti_current, s.ti_step_begin, s.steps,
                                  s.snapshots_written, s.next_output, s.gas.size(), s.dm.size(), s.radiated_energy,
-                                 s.next_particle_id);
+                                 s.next_particle_id, s.mesh_step_bin, s.mesh_step_begin);
   for (double v : tally_values(s.star_formation)) text += fmt::format(" {:a}", v);
   return text;
 }
@@ -127,6 +127,8 @@ void write_scalars(hdf5::File& f, const RestartState& s, std::uint64_t n_gas, st
   f.write_attribute("/Restart", "FormatVersion", kRestartFormatVersion);
   f.write_attribute("/Restart", "TiCurrent", static_cast<std::int64_t>(s.ti_current));
   f.write_attribute("/Restart", "TiStepBegin", static_cast<std::int64_t>(s.ti_step_begin));
+  f.write_attribute("/Restart", "MeshStepBin", static_cast<std::int64_t>(s.mesh_step_bin));
+  f.write_attribute("/Restart", "MeshStepBegin", static_cast<std::int64_t>(s.mesh_step_begin));
   f.write_attribute("/Restart", "Steps", static_cast<std::int64_t>(s.steps));
   f.write_attribute("/Restart", "SnapshotsWritten", s.snapshots_written);
   f.write_attribute("/Restart", "NextOutput", s.next_output);
@@ -308,13 +310,15 @@ RestartState read_restart(const std::string& path) {
   if (version != kRestartFormatVersion)
     throw InputError(fmt::format("{}: restart format version {} cannot be read by this build (it reads version {})",
                                  path, version, kRestartFormatVersion));
-  for (const char* name : {"TiCurrent", "TiStepBegin", "Steps", "SnapshotsWritten", "NextOutput", "RadiatedEnergy", "NextParticleId",
+  for (const char* name : {"TiCurrent", "TiStepBegin", "MeshStepBin", "MeshStepBegin", "Steps", "SnapshotsWritten", "NextOutput", "RadiatedEnergy", "NextParticleId",
                            "StarFormationTally", "GasParticles", "CollisionlessParticles", "Checksum"})
     if (!f.has_attribute("/Restart", name))
       throw InputError(fmt::format("{}: /Restart has no attribute {} (restart file incomplete)", path, name));
   RestartState s;
   s.ti_current = f.read_attribute_int64("/Restart", "TiCurrent").at(0);
   s.ti_step_begin = f.read_attribute_int64("/Restart", "TiStepBegin").at(0);
+  s.mesh_step_bin = static_cast<int>(f.read_attribute_int64("/Restart", "MeshStepBin").at(0));
+  s.mesh_step_begin = f.read_attribute_int64("/Restart", "MeshStepBegin").at(0);
   s.steps = f.read_attribute_int64("/Restart", "Steps").at(0);
   s.snapshots_written = static_cast<int>(f.read_attribute_double("/Restart", "SnapshotsWritten"));
   s.next_output = static_cast<int>(f.read_attribute_double("/Restart", "NextOutput"));

@@ -15,7 +15,9 @@ namespace fountain::io {
 // 7: the integer time at which the step in progress began (TiStepBegin).
 // 8: the particle fields stored and checksummed in the order of the table of particle fields
 //    (particles/ParticleFields.hpp), the fields it flags for restarts.
-inline constexpr int kRestartFormatVersion = 8;
+// 9: the mesh step of comoving TreePM (MeshStepBin, MeshStepBegin) and the mesh's parts of
+//    the accelerations and potentials.
+inline constexpr int kRestartFormatVersion = 9;
 
 struct RestartState {
   GasParticles gas;
@@ -24,6 +26,9 @@ struct RestartState {
   // A file written inside a step (after its recut, before its tasks) holds the particles at
   // the step's end time ti_current; the step began at ti_step_begin (= ti_current otherwise).
   std::int64_t ti_step_begin = 0;
+  // Comoving TreePM: the mesh step in progress (bin -1: none).
+  int mesh_step_bin = -1;
+  std::int64_t mesh_step_begin = 0;
   long long steps = 0;
   int snapshots_written = 0;
   int next_output = 1;

@@ -187,7 +187,7 @@ TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep)
   GasParticles g;
   std::vector<const void*> sent, unchanged{&g.id, &g.mass, &g.mass_initial, &g.mass_stars_hidden, &g.reservoir,
                                           &g.promoted, &g.promotion_time, &g.feedback_hot_energy, &g.x, &g.a_grav,
-                                          &g.potential, &g.wake_bin};
+                                          &g.potential, &g.a_mesh, &g.potential_mesh, &g.wake_bin};
   // The derived fields are changed by a step but worked out again by the holder's own drift.
   std::vector<const void*> derived;
   halo_step_fields(g, [&](auto& f) { sent.push_back(&f); });

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 #include <cstdlib>
 #include <numbers>
@@ -288,12 +289,15 @@ TEST(ComovingProblems, ZeldovichPlaneWaveInDarkMatter) {
   EXPECT_LE(v_rms, 0.03);
 }
 
-// GADGET's RMS-displacement limit: in a step no species moves, on average, more than a
-// quarter of its mean spacing, dt <= 0.25 a^2 d / v'_rms. Fast random motions on a lattice
-// (8^3 dark matter particles, v' of 1e4 km/s) must put every particle in a bin that keeps it.
-TEST(ComovingProblems, StepsKeepTheRmsDisplacementLimit) {
+// GADGET's RMS-displacement limits. In a step no species moves, on average, more than a
+// quarter of its mean spacing, dt <= 0.25 a^2 d / v'_rms; and the mesh force is recomputed
+// before the particles move, on average, a quarter of r_s, dt_PM <= 0.25 a^2 r_s / v'_rms
+// (over all particles), with no particle's step longer than the mesh step. Fast random
+// motions on a lattice (16^3 dark matter particles 4 apart, r_s = 5, v' of 1e4 km/s) must put
+// every particle in a bin that keeps its limit, and the mesh step in one that keeps the mesh's.
+TEST(ComovingProblems, StepsKeepTheRmsDisplacementLimits) {
   const double box = 64.0, a_begin = 0.1;
-  const GasParticles lattice = lattice_gas(8, box, 1.0, 1.0);
+  const GasParticles lattice = lattice_gas(16, box, 1.0, 1.0);
   CollisionlessParticles dm;
   std::mt19937_64 rng(3);
   std::normal_distribution<double> gauss(0.0, 1e4 / std::sqrt(3.0));
@@ -303,19 +307,68 @@ TEST(ComovingProblems, StepsKeepTheRmsDisplacementLimit) {
     v2 += dot(v, v);
     dm.push_back(lattice.id[k], Species::DarkMatter, lattice.mass[k], lattice.x[k], v, v, 0.0, 0);
   }
-  RunConfig cfg = comoving_config(box, 1.0, 0.0, a_begin, 1.0, 32);
-  cfg.gravity.softening_dark_matter = 1.0;
+  RunConfig cfg = comoving_config(box, 1.0, 0.0, a_begin, 1.0, 16);
+  cfg.gravity.softening_dark_matter = 0.5;
   Engine engine(cfg, GasParticles{}, dm);
   engine.initialise();
   const double v_rms = std::sqrt(v2 / static_cast<double>(dm.size()));
   const double hubble = 100.0 * std::pow(a_begin, -1.5);
-  const double limit = hubble * 0.25 * a_begin * a_begin * (box / 8) / v_rms;  // in ln a
+  const double limit = hubble * 0.25 * a_begin * a_begin * (box / 16) / v_rms;  // in ln a
+  const double mesh_limit = hubble * 0.25 * a_begin * a_begin * (1.25 * box / 16) / v_rms;
   const double tick = std::log(1.0 / a_begin) / std::ldexp(1.0, TimeLine::max_bin);
-  ASSERT_LT(limit, 0.01);  // the limit, not the largest step in ln a, decides here
+  ASSERT_LT(mesh_limit, 0.01);  // the limits, not the largest step in ln a, decide here
+  const int mesh_bin = engine.mesh_step().bin;
+  EXPECT_LE(std::ldexp(tick, mesh_bin), mesh_limit);
+  EXPECT_GT(std::ldexp(tick, mesh_bin + 1), 0.5 * mesh_limit);
   for (const TimeBin b : engine.dark_matter().time_bin) {
+    EXPECT_LE(b, mesh_bin);
     EXPECT_LE(std::ldexp(tick, b), limit);
     EXPECT_GT(std::ldexp(tick, b + 1), 0.5 * limit);  // and no smaller than it needs to be
   }
+}
+
+// The mesh step: inside it every particle keeps the mesh force of its start, bit for bit,
+// while the tree's part is recomputed for the active ones; at its end every particle is
+// active and the mesh force is new. (Eight close pairs on a slowly moving lattice take
+// steps shorter than the mesh step.)
+TEST(ComovingProblems, MeshForceIsRecomputedOnlyAtTheMeshStepsEnd) {
+  const double box = 64.0, a_begin = 0.1;
+  const GasParticles lattice = lattice_gas(16, box, 1.0, 1.0);
+  CollisionlessParticles dm;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> gauss(0.0, 30.0);
+  for (std::size_t k = 0; k < lattice.size(); ++k) {
+    const Vec3 v{gauss(rng), gauss(rng), gauss(rng)};
+    const Vec3 x = k < 8 ? lattice.x[k + 256] + Vec3{0.02, 0.0, 0.0} : lattice.x[k];
+    dm.push_back(lattice.id[k], Species::DarkMatter, lattice.mass[k], x, v, v, 0.0, 0);
+  }
+  RunConfig cfg = comoving_config(box, 1.0, 0.0, a_begin, 1.0, 16);
+  cfg.gravity.softening_dark_matter = 0.005;
+  Engine engine(cfg, GasParticles{}, dm);
+  engine.initialise();
+  int inside = 0, ends = 0;
+  for (int k = 0; k < 4000 && ends < 2; ++k) {
+    const Engine::MeshStepState before = engine.mesh_step();
+    const std::vector<Vec3> a_mesh = engine.dark_matter().a_mesh;
+    const IntegerTime ti_end = before.ti_begin + TimeLine::step_ticks(before.bin);
+    engine.step();
+    const CollisionlessParticles& now = engine.dark_matter();
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < now.size(); ++i) kept += std::memcmp(&now.a_mesh[i], &a_mesh[i], sizeof(Vec3)) == 0;
+    if (engine.ti_current() < ti_end) {
+      ++inside;
+      EXPECT_EQ(engine.mesh_step().ti_begin, before.ti_begin);
+      EXPECT_EQ(kept, now.size()) << "inside the mesh step at step " << k;
+    } else {
+      ++ends;
+      EXPECT_EQ(engine.ti_current(), ti_end) << "no particle's step outlasts the mesh step";
+      EXPECT_EQ(engine.mesh_step().ti_begin, ti_end);
+      EXPECT_LT(kept, now.size() / 10) << "the mesh force is recomputed at the mesh step's end";
+    }
+  }
+  std::printf("mesh steps: %d particle steps inside the first two\n", inside);
+  EXPECT_GT(inside, 0);
+  EXPECT_EQ(ends, 2);
 }
 
 }  // namespace

@@ -731,6 +731,8 @@ fountain::io::RestartState restart_state(std::size_t n_gas, std::size_t n_dm) {
   s.ti_current = std::int64_t{1} << 50;
   s.ti_step_begin = (std::int64_t{1} << 50) - (std::int64_t{1} << 44);
   s.steps = 1234;
+  s.mesh_step_bin = 47;
+  s.mesh_step_begin = std::int64_t{1} << 48;
   s.snapshots_written = 3;
   s.next_output = 4;
   s.parameters_yaml = "run:\n  t_end: 1\n";
@@ -743,11 +745,13 @@ TEST_F(IoTest, RestartRoundTripWithDarkMatterIsBitwise) {
   const auto s = restart_state(17, 29);
   const std::string path = file("restart.hdf5");
   fountain::io::write_restart(path, s);
-  EXPECT_EQ(fountain::io::kRestartFormatVersion, 8);
+  EXPECT_EQ(fountain::io::kRestartFormatVersion, 9);
   const auto r = fountain::io::read_restart(path);
 
   EXPECT_EQ(r.ti_current, s.ti_current);
   EXPECT_EQ(r.ti_step_begin, s.ti_step_begin);
+  EXPECT_EQ(r.mesh_step_bin, s.mesh_step_bin);
+  EXPECT_EQ(r.mesh_step_begin, s.mesh_step_begin);
   EXPECT_EQ(r.steps, s.steps);
   EXPECT_EQ(r.snapshots_written, s.snapshots_written);
   EXPECT_EQ(r.next_output, s.next_output);

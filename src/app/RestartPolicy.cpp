@@ -37,6 +37,8 @@ void RestartPolicy::save() {
   }
   out.ti_current = engine_.ti_current();
   out.ti_step_begin = engine_.ti_step_begin();
+  out.mesh_step_bin = engine_.mesh_step().bin;
+  out.mesh_step_begin = engine_.mesh_step().ti_begin;
   out.steps = engine_.steps();
   out.snapshots_written = snapshots_.written();
   out.next_output = outputs_.next_output();

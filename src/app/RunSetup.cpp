@@ -185,7 +185,7 @@ void start_engine(Engine& engine, const RunStart& start, const ParameterFile& pa
     return;
   }
   const io::RestartState& state = start.restart;
-  engine.restore(state.ti_current, state.steps, state.ti_step_begin);
+  engine.restore(state.ti_current, state.steps, state.ti_step_begin, {state.mesh_step_bin, state.mesh_step_begin});
   engine.set_radiated_energy(state.radiated_energy);
   engine.set_star_formation_total(state.star_formation);
   if (state.next_particle_id > 0) engine.set_next_particle_id(state.next_particle_id);

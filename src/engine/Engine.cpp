@@ -155,6 +155,45 @@ void Engine::set_displacement_limits() {
       [&](std::size_t i) { return dm_.v_full[i]; }, omega_dm);
 }
 
+// GADGET-2's separate long-range step (docs/physics.md §11, "The mesh step"): the mesh force is
+// recomputed only when every particle is synchronised at the end of the mesh step, whose
+// length keeps the RMS particle from moving more than a quarter of r_s (dt <= C a^2 r_s /
+// v'_rms over all particles), within the largest step in ln a and dt_max.
+void Engine::plan_mesh_step() {
+  StepContext::MeshStep& m = ctx_->mesh_step;
+  m.due = false;
+  m.close_kick = m.open_kick = m.predict_kick = 0.0;
+  if (!comoving_ || !ctx_->long_range) return;
+  const double now = static_cast<double>(ti_current_);
+  if (m.active() && ti_current_ != m.ti_end()) {
+    m.predict_kick = comoving_->gravity_kick(static_cast<double>(m.ti_begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(m.bin)), now);
+    return;
+  }
+  constexpr double kRmsFactor = 0.25;
+  double v2 = 0.0;
+  for (const Vec3& v : gas_.v_full) v2 += dot(v, v);
+  for (const Vec3& v : dm_.v_full) v2 += dot(v, v);
+  const double n = static_cast<double>(gas_.size() + dm_.size());
+  const double a = comoving_->scale_factor(now);
+  const double v_rms = n > 0.0 ? std::sqrt(v2 / n) : 0.0;
+  const double dt = v_rms > 0.0 ? kRmsFactor * a * a * ctx_->long_range->mesh.split().r_s / v_rms
+                                : std::numeric_limits<double>::infinity();
+  const int bin = std::min(comoving_->bin_for(std::min(dt, config_.integration.dt_max), ti_current_, config_.integration.max_dln_a),
+                           TimeLine::largest_aligned_bin(ti_current_));
+  if (bin < 0)
+    throw InputError(fmt::format("the mesh step at a = {} would be shorter than one tick of the timeline in ln a",
+                                 comoving_->scale_factor(now)));
+  const double last_mid =
+      m.active() ? static_cast<double>(m.ti_begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(m.bin)) : now;
+  m.bin = bin;
+  m.ti_begin = ti_current_;
+  m.due = true;
+  m.close_kick = comoving_->gravity_kick(last_mid, now);
+  m.open_kick = comoving_->gravity_kick(now, now + 0.5 * static_cast<double>(TimeLine::step_ticks(bin)));
+}
+
+Engine::MeshStepState Engine::mesh_step() const { return {ctx_->mesh_step.bin, ctx_->mesh_step.ti_begin}; }
+
 // TreePM in a periodic box (docs/gravity.md, "Periodic TreePM"): the mesh is a cube over the
 // box, so the box must be one.
 void Engine::setup_periodic_gravity() {
@@ -631,6 +670,8 @@ void Engine::initialise() {
   // (with the cells recut) until every h fits in its cell's reach.
   converge_density(Phase::Density);
   prepare_step(0);
+  ctx_->mesh_step = {};
+  plan_mesh_step();
   if (config_.gravity.enabled) {
     // The relative opening criterion needs a previous acceleration: a first pass with the
     // Barnes-Hut criterion gives it (as in GADGET-2).
@@ -649,8 +690,10 @@ void Engine::rebuild_now() {
   prepare_step(ti_current_);
 }
 
-void Engine::restore(IntegerTime ti_current, long long steps, IntegerTime ti_step_begin) {
+void Engine::restore(IntegerTime ti_current, long long steps, IntegerTime ti_step_begin, MeshStepState mesh_step) {
   initialised_ = true;
+  ctx_->mesh_step.bin = mesh_step.bin;
+  ctx_->mesh_step.ti_begin = mesh_step.ti_begin;
   all_current_ = true;  // every rank read the same file
   ti_current_ = ti_current;
   ti_step_begin_ = ti_step_begin;
@@ -732,6 +775,7 @@ StepInfo Engine::step(IntegerTime ti_stop) {
   prepare_step(ti_next);
   if (after_rebuild_ && space_.rebuild_count() != rebuilds_before) after_rebuild_();
   const int rebuilds_after_prepare = space_.rebuild_count();
+  plan_mesh_step();
   info.active = activate(Phase::Full);
   if (info.active > 0) {
     run_graph(&info);

@@ -77,7 +77,13 @@ class Engine {
   // Continues a run from a restart file's particles (in place of initialise()). A file written
   // inside a step holds the particles at that step's end, ti_current; the step began at
   // ti_step_begin, which the first step after the restart reports as its start.
-  void restore(IntegerTime ti_current, long long steps, IntegerTime ti_step_begin);
+  // The mesh step (comoving TreePM) in progress is restored with it.
+  struct MeshStepState {
+    int bin = -1;
+    IntegerTime ti_begin = 0;
+  };
+  void restore(IntegerTime ti_current, long long steps, IntegerTime ti_step_begin, MeshStepState mesh_step);
+  MeshStepState mesh_step() const;
   // Called inside step() right after the cells were recut because the run needed it, before
   // that step's tasks: a restart file written then holds the particles just as the recut
   // left them, and restore() recuts them into the same cells, so the restarted run goes on
@@ -189,6 +195,9 @@ class Engine {
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   // Each module's task types, in the order the modules run; across ranks the exchanges too.
   void set_displacement_limits();
+  // Comoving TreePM: at ti_current_, starts a mesh step if one is due (and the first), and
+  // sets the mesh's kick factors for this step (StepContext::MeshStep).
+  void plan_mesh_step();
   void setup_comoving();
   void setup_periodic_gravity();
   void register_tasks();

@@ -36,9 +36,10 @@ void build_tree(StepContext& ctx) {
 }
 
 void compute_long_range(StepContext& ctx) {
+  if (!ctx.mesh_due()) return;  // inside a mesh step: the particles keep its force
   LongRangeForce& lr = *ctx.long_range;
-  const GasParticles& gas = ctx.gas;
-  const CollisionlessParticles& dm = ctx.dm;
+  GasParticles& gas = ctx.gas;
+  CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
   std::vector<Vec3> x(n);
   std::vector<double> m(n);
@@ -53,6 +54,14 @@ void compute_long_range(StepContext& ctx) {
   lr.acceleration.resize(n);
   lr.potential.resize(n);
   lr.mesh.compute(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    gas.a_mesh[i] = lr.acceleration[i];
+    gas.potential_mesh[i] = lr.potential[i];
+  }
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    dm.a_mesh[i] = lr.acceleration[gas.size() + i];
+    dm.potential_mesh[i] = lr.potential[gas.size() + i];
+  }
 }
 
 void plan_tree_update(StepContext& ctx) {
@@ -117,20 +126,22 @@ void walk_cell(StepContext& ctx, int c) {
   // More than two groups: idle threads may take some.
   const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::kGroupSize);
   ctx.tree->accelerate(targets, config, results, split ? ctx.in_task_for_each : ForEach{});
-  if (long_range)
-    for (std::size_t k = 0; k < targets.size(); ++k) {
-      const auto source = static_cast<std::size_t>(targets[k].source_index);
-      results[k].acceleration += long_range->acceleration[source];
-      results[k].potential += long_range->potential[source];
-    }
   std::size_t k = 0;
   for (const std::size_t i : gas_targets) {
     gas.a_grav[i] = results[k].acceleration;
     gas.potential[i] = results[k++].potential;
+    if (long_range) {
+      gas.a_grav[i] += gas.a_mesh[i];
+      gas.potential[i] += gas.potential_mesh[i];
+    }
   }
   for (const std::size_t i : dm_targets) {
     dm.a_grav[i] = results[k].acceleration;
     dm.potential[i] = results[k++].potential;
+    if (long_range) {
+      dm.a_grav[i] += dm.a_mesh[i];
+      dm.potential[i] += dm.potential_mesh[i];
+    }
   }
 }
 

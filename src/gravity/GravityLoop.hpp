@@ -21,7 +21,8 @@ void refit_tree_group(StepContext& ctx, int g);
 void finish_tree(StepContext& ctx);
 
 // Periodic boxes: the long-range accelerations and potentials of every particle at its
-// drifted position (ctx.long_range), which the walks add to the tree's short range.
+// drifted position (ctx.long_range), into its a_mesh and potential_mesh, which the walks add
+// to the tree's short range. With a mesh step (ctx.mesh_step), only at its start.
 void compute_long_range(StepContext& ctx);
 
 // Accelerations and potentials of the active particles of leaf `c` from the tree (gather

@@ -1,4 +1,4 @@
-// A periodic run's long-range gravity: the mesh and the accelerations and potentials it gave this step's particles.
+// A periodic run's long-range gravity: the mesh and the accelerations and potentials of its last computation.
 #pragma once
 #include <cmath>
 #include <cstddef>

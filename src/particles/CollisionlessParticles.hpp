@@ -35,6 +35,8 @@ struct CollisionlessParticles {
 
   std::vector<Vec3> a_grav;            // gravitational acceleration at the last force computation
   std::vector<double> potential;       // specific gravitational potential there (for diagnostics)
+  std::vector<Vec3> a_mesh;            // periodic TreePM: the mesh's parts of both, from the
+  std::vector<double> potential_mesh;  // start of the mesh step (zero without the mesh)
 
   std::vector<TimeBin> time_bin;
   std::vector<std::int64_t> ti_begin;

@@ -66,6 +66,10 @@ struct GasParticles {
   // force computation.
   std::vector<Vec3> a_grav;
   std::vector<double> potential;
+  // Periodic TreePM: the mesh's parts of both (included in them), computed at the start of
+  // each mesh step and kept through it (zero without the mesh).
+  std::vector<Vec3> a_mesh;
+  std::vector<double> potential_mesh;
 
   // Time integration.
   std::vector<TimeBin> time_bin;      // step length = 2^time_bin integer time units

@@ -52,6 +52,8 @@ bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t&
                       gas.id[i]);
       const std::size_t s = stars.size() - 1;
       stars.a_grav[s] = gas.a_grav[i];
+      stars.a_mesh[s] = gas.a_mesh[i];
+      stars.potential_mesh[s] = gas.potential_mesh[i];
       stars.potential[s] = gas.potential[i];
       stars.time_bin[s] = gas.time_bin[i];
       stars.ti_begin[s] = gas.ti_begin[i];

@@ -76,6 +76,25 @@ struct StepContext {
   // recut; infinite otherwise).
   double dt_rms_gas = std::numeric_limits<double>::infinity();
   double dt_rms_dark_matter = std::numeric_limits<double>::infinity();
+  // Comoving TreePM (docs/physics.md §11, "The mesh step"): the mesh force is computed at the
+  // start of its own step, when every particle is synchronised, and kicks over that step's
+  // halves; no particle's bin exceeds the mesh step's. Inactive (bin < 0) in other runs,
+  // where a periodic mesh is recomputed with every force.
+  struct MeshStep {
+    int bin = -1;              // the current mesh step's bin (-1: none)
+    IntegerTime ti_begin = 0;  // and its start
+    // For the step at ti_current: whether the mesh is computed now, and the gravity kick
+    // factors of its force: from the last mesh step's midpoint to now (closing), from now to
+    // the new one's midpoint (opening), and from the current mesh step's midpoint to now
+    // (what a particle's predicted velocity adds to its integrated one between mesh steps).
+    bool due = false;
+    double close_kick = 0.0, open_kick = 0.0, predict_kick = 0.0;
+    bool active() const { return bin >= 0; }
+    IntegerTime ti_end() const { return ti_begin + (IntegerTime{1} << bin); }
+  };
+  MeshStep mesh_step{};
+  // Whether this step's gravity computes the mesh (every force without a mesh step).
+  bool mesh_due() const { return !mesh_step.active() || mesh_step.due; }
   // Sets ti_current and the expansion there.
   void set_time(IntegerTime ti);
   // x += v_full * drift_factor over [t0, t1]: the interval itself, or comoving, int dt / a^2.

@@ -60,7 +60,8 @@ int StepContext::courant_bin(std::size_t i) const {
   const double cs = hydro::sound_speed(gas.rho[i], gas.u[i], hydro.gamma);
   // Before this step's force loop: the signal velocity is the last force loop's.
   const double dt = courant_dt(*this, i, std::max(gas.v_sig[i], 2.0 * cs));
-  const int bin = std::min(bin_of(*this, dt), TimeLine::largest_aligned_bin(ti_current));
+  int bin = std::min(bin_of(*this, dt), TimeLine::largest_aligned_bin(ti_current));
+  if (mesh_step.active()) bin = std::min(bin, mesh_step.bin);
   return std::max(bin, 0);
 }
 
@@ -84,6 +85,25 @@ KickFactors closing_half(const StepContext& ctx, IntegerTime ti_begin) {
 KickFactors opening_half(const StepContext& ctx, int bin) {
   const double begin = static_cast<double>(ctx.ti_current);
   return comoving_kick(ctx, begin, begin + 0.5 * static_cast<double>(TimeLine::step_ticks(bin)));
+}
+
+// With a mesh step, a particle's own kicks take the tree's part of its gravity; the mesh's
+// part kicks over the mesh step's halves instead (docs/physics.md §11, "The mesh step").
+Vec3 particle_gravity(const StepContext& ctx, const Vec3& a_grav, const Vec3& a_mesh) {
+  return ctx.mesh_step.active() ? a_grav - a_mesh : a_grav;
+}
+// The mesh's closing and opening half kicks, at the start of a mesh step.
+void mesh_close_kick(const StepContext& ctx, Vec3& v_full, const Vec3& a_mesh) {
+  if (ctx.mesh_step.due) v_full += a_mesh * ctx.mesh_step.close_kick;
+}
+void mesh_open_kick(const StepContext& ctx, Vec3& v_full, const Vec3& a_mesh) {
+  if (ctx.mesh_step.due) v_full += a_mesh * ctx.mesh_step.open_kick;
+}
+// The velocity at ti_current of a particle whose own kicks just brought v_full there: inside
+// a mesh step, v_full holds the mesh's kick to that step's midpoint.
+Vec3 predicted_velocity(const StepContext& ctx, const Vec3& v_full, const Vec3& a_mesh) {
+  if (!ctx.mesh_step.active() || ctx.mesh_step.due) return v_full;
+  return v_full + a_mesh * ctx.mesh_step.predict_kick;
 }
 
 // exp(x), with the argument kept small: drifting h and rho is a prediction, not a law.
@@ -178,11 +198,12 @@ void kick_close(StepContext& ctx, int c) {
     if (dt != 0.0) {
       if (ctx.comoving) {
         const KickFactors k = closing_half(ctx, gas.ti_begin[i]);
-        gas.v_full[i] += gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+        gas.v_full[i] += gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
+        mesh_close_kick(ctx, gas.v_full[i], gas.a_mesh[i]);
         // No cooling in comoving runs (yet); hydro alone never halves u in one kick (GADGET).
         const double u_half = gas.u_full[i];
         gas.u_full[i] = std::max(u_half + gas.du_dt[i] * k.energy, 0.5 * u_half);
-        gas.v[i] = gas.v_full[i];
+        gas.v[i] = predicted_velocity(ctx, gas.v_full[i], gas.a_mesh[i]);
         gas.u[i] = gas.u_full[i];
         continue;
       }
@@ -209,8 +230,9 @@ void kick_close(StepContext& ctx, int c) {
     if (ctx.is_active_dm(i)) {
       const double kick = ctx.comoving ? closing_half(ctx, dm.ti_begin[i]).gravity
                                        : 0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current);
-      dm.v_full[i] += dm.a_grav[i] * kick;
-      dm.v[i] = dm.v_full[i];
+      dm.v_full[i] += particle_gravity(ctx, dm.a_grav[i], dm.a_mesh[i]) * kick;
+      mesh_close_kick(ctx, dm.v_full[i], dm.a_mesh[i]);
+      dm.v[i] = predicted_velocity(ctx, dm.v_full[i], dm.a_mesh[i]);
     }
 }
 
@@ -218,8 +240,9 @@ void timestep(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
   const HydroParams& p = ctx.hydro;
-  const int max_bin = std::min(ctx.comoving ? bin_of(ctx, ctx.integration.dt_max) : ctx.timeline.bin_for(ctx.integration.dt_max),
-                               TimeLine::largest_aligned_bin(ctx.ti_current));
+  int max_bin = std::min(ctx.comoving ? bin_of(ctx, ctx.integration.dt_max) : ctx.timeline.bin_for(ctx.integration.dt_max),
+                         TimeLine::largest_aligned_bin(ctx.ti_current));
+  if (ctx.mesh_step.active()) max_bin = std::min(max_bin, ctx.mesh_step.bin);
   IntegerTime ti_end_min = TimeLine::ticks;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (ctx.is_active(i)) {
@@ -290,7 +313,8 @@ void kick_open(StepContext& ctx, int c) {
     if (ctx.is_active(i)) {
       if (ctx.comoving) {
         const KickFactors k = opening_half(ctx, gas.time_bin[i]);
-        gas.v_full[i] += gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+        gas.v_full[i] += gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
+        mesh_open_kick(ctx, gas.v_full[i], gas.a_mesh[i]);
         gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], k.energy);
       } else {
         const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
@@ -304,9 +328,11 @@ void kick_open(StepContext& ctx, int c) {
   cell.v_max = v_max;
   CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
-    if (ctx.is_active_dm(i))
-      dm.v_full[i] += dm.a_grav[i] * (ctx.comoving ? opening_half(ctx, dm.time_bin[i]).gravity
-                                                   : 0.5 * ctx.timeline.step(dm.time_bin[i]));
+    if (ctx.is_active_dm(i)) {
+      dm.v_full[i] += particle_gravity(ctx, dm.a_grav[i], dm.a_mesh[i]) *
+                      (ctx.comoving ? opening_half(ctx, dm.time_bin[i]).gravity : 0.5 * ctx.timeline.step(dm.time_bin[i]));
+      mesh_open_kick(ctx, dm.v_full[i], dm.a_mesh[i]);
+    }
 }
 
 void wake(StepContext& ctx, int c) {
@@ -327,7 +353,7 @@ void wake(StepContext& ctx, int c) {
       const double begin = static_cast<double>(gas.ti_begin[i]);
       const KickFactors k = comoving_kick(ctx, 0.5 * (begin + static_cast<double>(new_end)),
                                           0.5 * (begin + static_cast<double>(old_end)));
-      gas.v_full[i] -= gas.a_hydro[i] * k.hydro + gas.a_grav[i] * k.gravity;
+      gas.v_full[i] -= gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
       gas.u_full[i] -= gas.du_dt[i] * k.energy;
     } else {
       const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
