@@ -22,6 +22,7 @@ constexpr int kSourceLanes = 8;
 struct ParticleSources {
   std::vector<float> x, y, z, gm, h, h_inv, key_hi, key_lo;
   std::vector<std::int32_t> kept;
+  std::vector<float> r2;
   // The kept sources' fields, contiguous so that the pair loops vectorise.
   std::vector<float> kx, ky, kz, kgm, kh, kh_inv, kkey_hi, kkey_lo;
   int count = 0, kept_count = 0;
@@ -45,16 +46,21 @@ struct ParticleSources {
   // The sources with squared distance below r_cut2 from the target, in list order, padded by
   // the sentinel placed `away` from the target (so that its pair stays finite): the padded
   // count. kept_count is the unpadded one.
-  int keep_within(float xt, float yt, float zt, float r_cut2, float away) {
+  // With `softened`, the fields of the softened pairs (h, 1/h, index keys) are kept too.
+  int keep_within(float xt, float yt, float zt, float r_cut2, float away, bool softened) {
     x[static_cast<std::size_t>(count)] = xt + away;
     y[static_cast<std::size_t>(count)] = yt;
     z[static_cast<std::size_t>(count)] = zt;
+    // Squared distances first (a loop that vectorises), then the branch-free compaction.
+    r2.resize(static_cast<std::size_t>(count));
+    for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k) {
+      const float dx = xt - x[k], dy = yt - y[k], dz = zt - z[k];
+      r2[k] = dx * dx + dy * dy + dz * dz;
+    }
     int m = 0;
     for (int k = 0; k < count; ++k) {
-      const float dx = xt - x[static_cast<std::size_t>(k)], dy = yt - y[static_cast<std::size_t>(k)],
-                  dz = zt - z[static_cast<std::size_t>(k)];
       kept[static_cast<std::size_t>(m)] = k;
-      m += dx * dx + dy * dy + dz * dz < r_cut2 ? 1 : 0;
+      m += r2[static_cast<std::size_t>(k)] < r_cut2 ? 1 : 0;
     }
     kept_count = m;
     while (m % kSourceLanes != 0) kept[static_cast<std::size_t>(m++)] = count;
@@ -64,11 +70,15 @@ struct ParticleSources {
       ky[i] = y[k];
       kz[i] = z[k];
       kgm[i] = gm[k];
-      kh[i] = h[k];
-      kh_inv[i] = h_inv[k];
-      kkey_hi[i] = key_hi[k];
-      kkey_lo[i] = key_lo[k];
     }
+    if (softened)
+      for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) {
+        const auto k = static_cast<std::size_t>(kept[i]);
+        kh[i] = h[k];
+        kh_inv[i] = h_inv[k];
+        kkey_hi[i] = key_hi[k];
+        kkey_lo[i] = key_lo[k];
+      }
     return m;
   }
 };
@@ -153,7 +163,7 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
   for (int t = 0; t < nt; ++t) {
     const float xt = g.xr[t], yt = g.yr[t], zt = g.zr[t];
     float sum_x[kSourceLanes] = {}, sum_y[kSourceLanes] = {}, sum_z[kSourceLanes] = {}, sum_pot[kSourceLanes] = {};
-    const int n_far = far.keep_within(xt, yt, zt, r_cut2, 2.0f * r_cut);
+    const int n_far = far.keep_within(xt, yt, zt, r_cut2, 2.0f * r_cut, false);
     for (int k0 = 0; k0 < n_far; k0 += kSourceLanes)
       for (int l = 0; l < kSourceLanes; ++l) {
         const auto k = static_cast<std::size_t>(k0 + l);
@@ -173,7 +183,7 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
     const IndexKey self{g.self_hi[t], g.self_lo[t]};
     const float h_t = g.spline[t], h_inv_t = g.spline_inv[t];
     float owned[kSourceLanes] = {};
-    const int n_near = near.keep_within(xt, yt, zt, r_cut2, 2.0f * r_cut);
+    const int n_near = near.keep_within(xt, yt, zt, r_cut2, 2.0f * r_cut, true);
     for (int k0 = 0; k0 < n_near; k0 += kSourceLanes)
       for (int l = 0; l < kSourceLanes; ++l) {
         const auto k = static_cast<std::size_t>(k0 + l);
