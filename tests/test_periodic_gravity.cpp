@@ -194,30 +194,38 @@ TEST(PeriodicTreePM, MeshAndExactShortRangeAtTheProductionSplit) {
 
 // The production force: mesh plus the tree's short range (relative criterion, alpha_force
 // 0.01, with |a_old| from a first Barnes-Hut pass, as a run's first step gives it).
-ErrorQuantiles tree_errors(bool clustered) {
-  const Reference& ref = reference(clustered);
-  const ParticleSet& s = ref.set;
-  PeriodicMesh mesh(64, 1.0, PeriodicMesh::default_split_scale(64, 1.0), 1.0);
-  std::vector<Vec3> mesh_acc(s.x.size());
+struct ProductionForces {
+  GravitySplit split;
+  std::vector<Vec3> mesh_acc, tree_acc;
+};
+ProductionForces production_forces(const ParticleSet& s, int cells) {
+  PeriodicMesh mesh(cells, 1.0, PeriodicMesh::default_split_scale(cells, 1.0), 1.0);
+  ProductionForces f{mesh.split(), std::vector<Vec3>(s.x.size()), {}};
   std::vector<double> mesh_pot(s.x.size());
-  mesh.compute(s.x, s.m, mesh_acc, mesh_pot);
+  mesh.compute(s.x, s.m, f.mesh_acc, mesh_pot);
   TreeConfig tc;
   tc.periodic = true;
   tc.box_size = 1.0;
   const GravityTree tree(s.x, s.m, s.eps, tc);
   WalkConfig wc;
   wc.alpha_force = 0.01;
-  wc.split = mesh.split();
+  wc.split = f.split;
   std::vector<GravityTarget> targets(s.x.size());
   for (std::size_t i = 0; i < s.x.size(); ++i) targets[i] = {s.x[i], s.eps[i], kNoOldAcceleration, std::int64_t(i)};
   std::vector<GravityResult> first(s.x.size()), second(s.x.size());
   tree.accelerate(targets, wc, first);
-  for (std::size_t i = 0; i < s.x.size(); ++i) targets[i].a_old = norm(first[i].acceleration + mesh_acc[i]);
+  for (std::size_t i = 0; i < s.x.size(); ++i) targets[i].a_old = norm(first[i].acceleration + f.mesh_acc[i]);
   tree.accelerate(targets, wc, second);
+  for (const GravityResult& r : second) f.tree_acc.push_back(r.acceleration);
+  return f;
+}
+ErrorQuantiles tree_errors(bool clustered) {
+  const Reference& ref = reference(clustered);
+  const ProductionForces f = production_forces(ref.set, 64);
   std::vector<double> errors;
   for (std::size_t t = 0; t < ref.targets.size(); ++t) {
     const std::size_t i = ref.targets[t];
-    errors.push_back(norm(second[i].acceleration + mesh_acc[i] - ref.exact[t]) / norm(ref.exact[t]));
+    errors.push_back(norm(f.tree_acc[i] + f.mesh_acc[i] - ref.exact[t]) / norm(ref.exact[t]));
   }
   return quantiles(std::move(errors));
 }
@@ -368,27 +376,12 @@ TEST(PeriodicTreePM, PlaneWaveForceFollowsEwald) {
   for (const int m : {1, 2, 3}) {
     const PlaneWave w = plane_wave(m, 0.1);
     const ParticleSet& s = w.set;
-    PeriodicMesh mesh(32, 1.0, PeriodicMesh::default_split_scale(32, 1.0), 1.0);
-    std::vector<Vec3> mesh_acc(s.x.size());
-    std::vector<double> mesh_pot(s.x.size());
-    mesh.compute(s.x, s.m, mesh_acc, mesh_pot);
-    const DirectSums exact_short = direct_summation_periodic(s.x, s.m, s.eps, 1.0, 1.0, mesh.split());
-    TreeConfig tc;
-    tc.periodic = true;
-    tc.box_size = 1.0;
-    const GravityTree tree(s.x, s.m, s.eps, tc);
-    WalkConfig wc;
-    wc.split = mesh.split();
-    std::vector<GravityTarget> targets(s.x.size());
-    for (std::size_t i = 0; i < s.x.size(); ++i) targets[i] = {s.x[i], s.eps[i], kNoOldAcceleration, std::int64_t(i)};
-    std::vector<GravityResult> first(s.x.size()), second(s.x.size());
-    tree.accelerate(targets, wc, first);
-    for (std::size_t i = 0; i < s.x.size(); ++i) targets[i].a_old = norm(first[i].acceleration + mesh_acc[i]);
-    tree.accelerate(targets, wc, second);
+    const ProductionForces f = production_forces(s, 32);
+    const DirectSums exact_short = direct_summation_periodic(s.x, s.m, s.eps, 1.0, 1.0, f.split);
     std::vector<Vec3> with_exact(s.x.size()), with_tree(s.x.size());
     for (std::size_t i = 0; i < s.x.size(); ++i) {
-      with_exact[i] = mesh_acc[i] + exact_short.acceleration[i];
-      with_tree[i] = mesh_acc[i] + second[i].acceleration;
+      with_exact[i] = f.mesh_acc[i] + exact_short.acceleration[i];
+      with_tree[i] = f.mesh_acc[i] + f.tree_acc[i];
     }
     const double c_exact = follow_factor(w, with_exact), c_tree = follow_factor(w, with_tree);
     std::printf("plane wave k = %d k_f: mesh + exact short range %.5f, mesh + tree %.5f of Ewald\n", m, c_exact, c_tree);
