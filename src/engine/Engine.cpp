@@ -122,13 +122,16 @@ void Engine::setup_comoving() {
                                  config_.integration.dt_max, c.a_begin, c.a_end));
 }
 
+// GADGET-2's MaxRMSDisplacementFac: the RMS particle moves at most this fraction of a length
+// (a species' spacing, or the mesh's r_s) in a step.
+constexpr double kRmsDisplacementFactor = 0.25;
+
 // The RMS-displacement limit of a comoving run (GADGET-2's MaxRMSDisplacementFac): per
 // species s, dt <= C a^2 d_s / v'_rms,s with d_s = (m_min,s / (Omega_s rho_crit0))^(1/3) the
 // mean spacing of its lightest particles, so that no species moves, on average, more than a
 // quarter of its spacing in a step. Recomputed at each recut, as GADGET does at each domain
 // decomposition, from every particle (a comoving run has gravity, so every rank holds them all).
 void Engine::set_displacement_limits() {
-  constexpr double kRmsFactor = 0.25;
   const cosmology::CosmologyParams& c = config_.comoving.cosmology;
   const double rho_crit = 3.0 * background_->hubble0() * background_->hubble0() /
                           (8.0 * std::numbers::pi * config_.gravity.G);
@@ -144,7 +147,7 @@ void Engine::set_displacement_limits() {
     }
     if (count == 0 || !(v2 > 0.0) || !(omega > 0.0)) return std::numeric_limits<double>::infinity();
     const double spacing = std::cbrt(m_min / (omega * rho_crit));
-    return kRmsFactor * a * a * spacing / std::sqrt(v2 / static_cast<double>(count));
+    return kRmsDisplacementFactor * a * a * spacing / std::sqrt(v2 / static_cast<double>(count));
   };
   const double omega_dm = gas_.size() > 0 ? c.omega_m - c.omega_b : c.omega_m;
   const double omega_gas = dm_.size() > 0 ? c.omega_b : c.omega_m;
@@ -166,25 +169,23 @@ void Engine::plan_mesh_step() {
   if (!comoving_ || !ctx_->long_range) return;
   const double now = static_cast<double>(ti_current_);
   if (m.active() && ti_current_ != m.ti_end()) {
-    m.predict_kick = comoving_->gravity_kick(static_cast<double>(m.ti_begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(m.bin)), now);
+    m.predict_kick = comoving_->gravity_kick(m.midpoint(), now);
     return;
   }
-  constexpr double kRmsFactor = 0.25;
   double v2 = 0.0;
   for (const Vec3& v : gas_.v_full) v2 += dot(v, v);
   for (const Vec3& v : dm_.v_full) v2 += dot(v, v);
   const double n = static_cast<double>(gas_.size() + dm_.size());
   const double a = comoving_->scale_factor(now);
   const double v_rms = n > 0.0 ? std::sqrt(v2 / n) : 0.0;
-  const double dt = v_rms > 0.0 ? kRmsFactor * a * a * ctx_->long_range->mesh.split().r_s / v_rms
+  const double dt = v_rms > 0.0 ? kRmsDisplacementFactor * a * a * ctx_->long_range->mesh.split().r_s / v_rms
                                 : std::numeric_limits<double>::infinity();
   const int bin = std::min(comoving_->bin_for(std::min(dt, config_.integration.dt_max), ti_current_, config_.integration.max_dln_a),
                            TimeLine::largest_aligned_bin(ti_current_));
   if (bin < 0)
     throw InputError(fmt::format("the mesh step at a = {} would be shorter than one tick of the timeline in ln a",
                                  comoving_->scale_factor(now)));
-  const double last_mid =
-      m.active() ? static_cast<double>(m.ti_begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(m.bin)) : now;
+  const double last_mid = m.active() ? m.midpoint() : now;
   m.bin = bin;
   m.ti_begin = ti_current_;
   m.due = true;

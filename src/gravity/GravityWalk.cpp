@@ -46,15 +46,15 @@ constexpr double kSoftenedNodeAngle = 0.5;
 // directly (docs/gravity.md, "Periodic TreePM").
 constexpr std::int32_t kDirectNodeSize = 32;
 
-// Every test is the one-target test applied to the nearest point of the group's box, so a
-// group of one decides exactly as a single target would, and each target of a larger group
-// meets every criterion at least as strictly as it would alone.
 inline double GravityTree::box_distance2(const Group& g, const Vec3& x) const {
   const double px = gap(image(x.x - g.centre.x), g.half.x), py = gap(image(x.y - g.centre.y), g.half.y),
                pz = gap(image(x.z - g.centre.z), g.half.z);
   return px * px + py * py + pz * pz;
 }
 
+// Every test is the one-target test applied to the nearest point of the group's box, so a
+// group of one decides exactly as a single target would, and each target of a larger group
+// meets every criterion at least as strictly as it would alone.
 void GravityTree::walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const {
   list.clear();
   const double theta2 = config.theta * config.theta;
@@ -119,25 +119,20 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     if (accept) {
       (beyond ? list.nodes : list.soft_nodes).push_back(n);
       n = node.next;
-    } else if (node.first_child >= 0 && config.split.enabled() && node.count <= kDirectNodeSize) {
-      // The short range at high redshift opens nearly every node within the cut-off down to
-      // its leaves; a small node's particles are listed at once instead (each exact).
+    } else if (node.first_child >= 0 && !(config.split.enabled() && node.count <= kDirectNodeSize)) {
+      n = node.first_child;
+    } else if (config.split.enabled()) {
+      // TreePM: a leaf, or a small node (the short range at high redshift opens nearly every
+      // node within the cut-off down to its leaves; its particles are listed at once, each
+      // exact). Each particle is tested, for the cut-off drops those beyond it from the box.
       add_particles(node);
       n = node.next;
-    } else if (node.first_child >= 0) {
-      n = node.first_child;
     } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
-      // Decided for the whole leaf, so its particles need no test of their own, but for the
-      // short range's cut-off, which drops a leaf's particles beyond it from the whole box.
+      // Decided for the whole leaf, so its particles need no test of their own.
       auto& to = bulk == Bulk::far ? list.far : list.near;
-      if (config.split.enabled()) {
-        for (std::int32_t k = node.first; k < node.first + node.count; ++k)
-          if (box_distance2(g, pos_[k]) <= cutoff * cutoff) to.push_back(k);
-      } else {
-        const std::size_t at = to.size();
-        to.resize(at + static_cast<std::size_t>(node.count));
-        std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
-      }
+      const std::size_t at = to.size();
+      to.resize(at + static_cast<std::size_t>(node.count));
+      std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
       n = node.next;
     } else {
       add_particles(node);

@@ -143,13 +143,15 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
   // sources (in list order) before the factors are computed, eight at a time over sources.
   // Dropped pairs are those beyond the cut-off, which add nothing.
   thread_local ParticleSources far, near;
-  auto particle_source = [&](ParticleSources& into) {
-    return [&, this](std::int32_t k, std::size_t i) {
+  // The far list's pairs need no softening or index keys.
+  auto particle_source = [&](ParticleSources& into, bool softened) {
+    return [&, softened, this](std::int32_t k, std::size_t i) {
       const auto [px, py, pz] = offset(pos_[k]);
       into.x[i] = px;
       into.y[i] = py;
       into.z[i] = pz;
       into.gm[i] = static_cast<float>(G * mass_[k] * gm_scale);
+      if (!softened) return;
       into.h[i] = spline_f_[k];
       into.h_inv[i] = spline_inv_f_[k];
       const IndexKey key = index_key(index_[k]);
@@ -157,8 +159,8 @@ FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, co
       into.key_lo[i] = key.lo;
     };
   };
-  far.gather(list.far, particle_source(far));
-  near.gather(list.near, particle_source(near));
+  far.gather(list.far, particle_source(far, false));
+  near.gather(list.near, particle_source(near, true));
   const float r_cut2 = r_cut * r_cut;
   for (int t = 0; t < nt; ++t) {
     const float xt = g.xr[t], yt = g.yr[t], zt = g.zr[t];

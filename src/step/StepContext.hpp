@@ -91,6 +91,7 @@ struct StepContext {
     double close_kick = 0.0, open_kick = 0.0, predict_kick = 0.0;
     bool active() const { return bin >= 0; }
     IntegerTime ti_end() const { return ti_begin + (IntegerTime{1} << bin); }
+    double midpoint() const { return static_cast<double>(ti_begin) + 0.5 * static_cast<double>(IntegerTime{1} << bin); }
   };
   MeshStep mesh_step{};
   // Whether this step's gravity computes the mesh (every force without a mesh step).
