@@ -18,7 +18,7 @@ constexpr const char* kColumns =
     "feedback_own feedback_reservoir feedback_hot thermal_locked h_min_gas dt_min";
 }
 
-StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(path) {
+StatisticsFile::StatisticsFile(const std::string& path, bool append, bool comoving) : path_(path) {
   file_ = std::fopen(path.c_str(), append ? "a" : "w");
   if (!file_) throw InputError(fmt::format("{}: cannot open the statistics file: {}", path, std::strerror(errno)));
   if (!append) {
@@ -30,6 +30,12 @@ StatisticsFile::StatisticsFile(const std::string& path, bool append) : path_(pat
                "radiated_energy + thermal_locked - feedback_own - feedback_reservoir - feedback_hot (all since "
                "the start; thermal_locked is the thermal energy of gas turned into stars). h_min_gas: the smallest gas "
                "smoothing length; dt_min: the smallest particle timestep, both at the line's time.\n");
+    if (comoving)
+      fmt::print(file_,
+                 "# A comoving run: time is the scale factor a; every quantity is physical (rho'/a^3, u'/a^2, a h'), "
+                 "velocities and potentials peculiar (v'/a, Phi'/a), in the run's h-scaled units (masses Msun/h, "
+                 "lengths Mpc/h); sfr_msun_per_yr is in Msun per year of cosmic time and dt_min is cosmic time. The "
+                 "energies are not conserved: the expansion does work on them.\n");
     fmt::print(file_, "# {}\n", kColumns);
     std::fflush(file_);
   }

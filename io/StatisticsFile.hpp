@@ -12,8 +12,9 @@ namespace fountain::io {
 // run keeps what it measured.
 class StatisticsFile {
  public:
-  // Creates `path` (or, when `append`, continues it after a restart).
-  StatisticsFile(const std::string& path, bool append);
+  // Creates `path` (or, when `append`, continues it after a restart). A comoving run's file
+  // says that its time column is the scale factor and its energies peculiar.
+  StatisticsFile(const std::string& path, bool append, bool comoving = false);
   ~StatisticsFile();
   StatisticsFile(const StatisticsFile&) = delete;
   StatisticsFile& operator=(const StatisticsFile&) = delete;

@@ -46,8 +46,10 @@ struct Diagnostics {
 };
 
 // Sums over the current particle state (gas at its predicted values; potentials from the
-// last force computation, zero without gravity).
+// last force computation, zero without gravity). A comoving run's state (scale factor a < 1
+// or not, gamma = 5/3) is measured physically: rho'/a^3, u'/a^2, h = a h', peculiar
+// velocities v'/a and potentials Phi'/a; plain runs pass a = 1.
 Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
-                    const FigurePhases& phases);
+                    const FigurePhases& phases, double a = 1.0);
 
 }  // namespace fountain::analysis

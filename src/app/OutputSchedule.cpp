@@ -81,32 +81,36 @@ StatisticsSeries::StatisticsSeries(const RunConfig& config, Engine& engine, Temp
     : config_(config),
       engine_(engine),
       temperature_(std::move(temperature)),
-      phases_(analysis::FigurePhases::paper(config.units)),
+      phases_(analysis::FigurePhases::paper(config.physical_units())),
       sf_mass_before_(engine.star_formation_total().mass_formed),
-      sf_time_before_(engine.time()) {
+      sf_time_before_(engine.cosmic_time()) {
   if (enabled() && engine.rank() == 0)
-    file_ = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", append);
+    file_ = std::make_unique<io::StatisticsFile>(config.output.directory + "/statistics.txt", append,
+                                                 config.comoving.enabled);
 }
 
 void StatisticsSeries::write() {
   engine_.gather_state();  // on every rank alike, though only rank 0 writes
   if (!file_) return;
-  const double msun_per_mass = config_.units.mass_cgs / 1.988409870698051e33;
-  const double years_per_time = config_.units.time_cgs() / 3.15576e7;
-  analysis::Diagnostics d = analysis::measure(engine_.gas(), engine_.dark_matter(), temperature_, phases_);
+  // Physical units: a comoving run's h-scaled units divided by h (h cancels in the rate).
+  const Units units = config_.physical_units();
+  const double msun_per_mass = units.mass_cgs / 1.988409870698051e33;
+  const double years_per_time = units.time_cgs() / 3.15576e7;
+  analysis::Diagnostics d =
+      analysis::measure(engine_.gas(), engine_.dark_matter(), temperature_, phases_, engine_.scale_factor());
   d.radiated = engine_.radiated_energy();
   const auto& sf = engine_.star_formation_total();
-  const double elapsed = engine_.time() - sf_time_before_;
+  const double elapsed = engine_.cosmic_time() - sf_time_before_;
   if (elapsed > 0.0)
     d.sfr_msun_per_yr = (sf.mass_formed - sf_mass_before_) * msun_per_mass / (elapsed * years_per_time);
   sf_mass_before_ = sf.mass_formed;
-  sf_time_before_ = engine_.time();
+  sf_time_before_ = engine_.cosmic_time();
   d.feedback_own = sf.energy_own;
   d.feedback_reservoir = sf.energy_reservoir;
   d.feedback_hot = sf.energy_hot;
   d.thermal_locked = sf.thermal_locked;
-  d.dt_min = engine_.timeline().step(d.time_bin_min);
-  file_->write(engine_.time(), engine_.steps(), d);
+  d.dt_min = engine_.cosmic_step(d.time_bin_min);
+  file_->write(config_.comoving.enabled ? engine_.scale_factor() : engine_.time(), engine_.steps(), d);
 }
 
 }  // namespace fountain

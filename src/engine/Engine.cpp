@@ -74,7 +74,8 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     };
   if (config_.cooling.enabled) {
     cooling_table_ = std::make_unique<cooling::CoolingTable>(config_.cooling.tables(), config_.cooling.metallicity);
-    cooling_ = std::make_unique<cooling::RadiativeCooling>(*cooling_table_, config_.units, config_.cooling.hydrogen_fraction);
+    cooling_ = std::make_unique<cooling::RadiativeCooling>(*cooling_table_, config_.physical_units(),
+                                                           config_.cooling.hydrogen_fraction);
     ctx_->cooling = cooling_.get();
   }
   for (std::size_t i = 0; i < gas_.size(); ++i)
@@ -99,8 +100,6 @@ void Engine::setup_comoving() {
   const ComovingConfig& c = config_.comoving;
   if (std::fabs(config_.hydro.gamma - 5.0 / 3.0) > 1e-12)
     throw InputError(fmt::format("a comoving run needs hydro.gamma = 5/3 (its u' = a^2 u); it is {}", config_.hydro.gamma));
-  if (config_.cooling.enabled || config_.star_formation.enabled)
-    throw InputError("cooling, star formation and feedback are not yet available in comoving runs");
   // The matter of the expanding background gravitates; and with gravity every rank keeps every
   // particle current, which the displacement limits below read.
   if (!config_.gravity.enabled) throw InputError("a comoving run needs gravity (gravity.enabled: true)");
@@ -234,18 +233,20 @@ void Engine::setup_star_formation() {
   const StarFormationParams& p = config_.star_formation;
   sf_ = std::make_unique<star_formation::StarFormationState>();
   sf_->params = p;
-  sf_->law = {p.efficiency, p.density_threshold(config_.units), p.temperature_threshold, config_.gravity.G};
+  // Thresholds and rates are physical: in a comoving run's h-scaled units the conversions to cgs carry h.
+  const Units units = config_.physical_units();
+  sf_->law = {p.efficiency, p.density_threshold(units), p.temperature_threshold, config_.gravity.G};
   fb_ = std::make_unique<feedback::FeedbackState>();
   fb_->params = config_.feedback;
   fb_->t_star = p.temperature_threshold;
-  fb_->energy_per_mass = config_.feedback.energy_per_mass(config_.units);
+  fb_->energy_per_mass = config_.feedback.energy_per_mass(units);
   if (cooling_) {
     const cooling::RadiativeCooling* c = cooling_.get();
     sf_->temperature = [c](double u) { return c->temperature(u); };
     fb_->energy_at = [c](double t) { return c->energy_at(t); };
   } else {
     // Fully ionised primordial gas, as the diagnostics assume: T is proportional to u.
-    const double factor = ideal_gas_kelvin_per_energy(config_.units, config_.hydro.gamma);
+    const double factor = ideal_gas_kelvin_per_energy(units, config_.hydro.gamma);
     sf_->temperature = [factor](double u) { return factor * u; };
     fb_->energy_at = [factor](double t) { return t / factor; };
   }
@@ -253,6 +254,14 @@ void Engine::setup_star_formation() {
   fb_->cold = {0.1 * sf_->law.rho_threshold, fb_->energy_at(2.0 * p.temperature_threshold)};
   for (auto i : gas_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
   for (auto i : dm_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
+}
+
+double Engine::scale_factor() const { return comoving_ ? comoving_->scale_factor(static_cast<double>(ti_current_)) : 1.0; }
+double Engine::cosmic_time() const { return comoving_ ? comoving_->cosmic_time(0.0, static_cast<double>(ti_current_)) : time(); }
+double Engine::cosmic_step(int bin) const {
+  if (!comoving_) return timeline_.step(bin);
+  const double now = static_cast<double>(ti_current_);
+  return comoving_->cosmic_time(now, now + static_cast<double>(TimeLine::step_ticks(bin)));
 }
 
 IntegerTime Engine::to_ticks(double t) const {
@@ -590,7 +599,7 @@ void Engine::run_graph(StepInfo* info) {
   ctx_->h_max_capped = 0;
   ctx_->h_min_held = 0;
   ctx_->msph_decoupled = 0;
-  if (sf_) sf_->time = fb_->time = time();
+  if (sf_) sf_->time = fb_->time = comoving_ ? scale_factor() : time();
   if (ranks_) post_receives();
   const StepTasks& kinds = tasks_;
   auto runner = [&kinds](const tasks::Task& t) { kinds[t.type].run(t); };

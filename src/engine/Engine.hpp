@@ -96,6 +96,12 @@ class Engine {
   void compute_hydro_at(IntegerTime ti);
 
   double time() const { return timeline_.time(ti_current_); }
+  // Comoving runs (whose time() is ln a): the scale factor now, the cosmic time since the
+  // start, and the cosmic time a step of `bin` from now spans. Plain runs: 1, time() and the
+  // step itself.
+  double scale_factor() const;
+  double cosmic_time() const;
+  double cosmic_step(int bin) const;
   IntegerTime ti_current() const { return ti_current_; }
   // When the step in progress began (inside step(): the previous step's end); ti_current()
   // between steps.

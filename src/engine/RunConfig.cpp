@@ -37,11 +37,6 @@ void read_comoving(const ParameterFile& p, RunConfig& c) {
                                    std::string_view(key) == "output.delta_time"
                                        ? "output.scale_factors or output.redshifts"
                                        : "cosmology.a_begin and cosmology.a_end"));
-  // The statistics' phases and energies are physical quantities of plain runs.
-  if (p.integer("output.statistics_every") > 0)
-    throw InputError(fmt::format("{}: the statistics file is not yet written in comoving runs (its phases and "
-                                 "energies would be of comoving variables); set it to 0",
-                                 p.where("output.statistics_every")));
   cc.cosmology.omega_m = p.real("cosmology.omega_m");
   cc.cosmology.omega_lambda = p.real("cosmology.omega_lambda");
   cc.cosmology.omega_b = p.real("cosmology.omega_b");
@@ -122,6 +117,15 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.parameters_yaml = p.used_as_yaml();
   c.check_times(p, "run.t_begin");
   return c;
+}
+
+Units RunConfig::physical_units() const {
+  if (!comoving.enabled) return units;
+  const double h = comoving.cosmology.hubble_param;
+  Units u = units;
+  u.length_cgs /= h;
+  u.mass_cgs /= h;
+  return u;
 }
 
 void RunConfig::set_comoving_times() {

@@ -42,7 +42,7 @@ struct ComovingFileConventions {
 
 // A comoving run (docs/physics.md §11): the clock is the scale factor from a_begin to a_end,
 // the state comoving (x', v' = a^2 dx/dt, rho', u', h'). Hydro with gamma = 5/3 and gravity;
-// cooling, star formation and feedback are not yet available in comoving form.
+// cooling, star formation and feedback read physical values (StepContext::Expansion).
 struct ComovingConfig {
   bool enabled = false;
   cosmology::CosmologyParams cosmology;
@@ -72,6 +72,10 @@ struct RunConfig {
   OutputConfig output;
   RestartConfig restart;
   std::string parameters_yaml;      // the parameters in force, for snapshots
+
+  // The units' values in cgs without h: `units` itself in plain runs; a comoving run's
+  // h-scaled units (Mpc/h, Msun/h) divided by h (what cooling and star formation convert with).
+  Units physical_units() const;
 
   // Reads and cross-checks the parameters (the start time is run.t_begin, given or default).
   static RunConfig from(const ParameterFile& p);

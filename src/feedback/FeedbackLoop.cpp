@@ -10,9 +10,11 @@
 
 namespace fountain::feedback {
 
-void deposit(const FeedbackState& fb, GasParticles& gas, std::size_t i, double dm, CellFeedback& cf) {
+void deposit(StepContext& ctx, const FeedbackState& fb, std::size_t i, double dm, CellFeedback& cf) {
+  GasParticles& gas = ctx.gas;
+  // Energies are physical; a heating du is a^2 du in u' (docs/physics.md §11).
   const FeedbackShares e = split_feedback(fb.energy_per_mass * dm, fb.params.eps_cold, fb.params.eps_hot);
-  gas.u_full[i] += e.own / gas.mass[i];
+  gas.u_full[i] += ctx.expansion.code_energy(e.own / gas.mass[i]);
   gas.u[i] = gas.u_full[i];
   gas.reservoir[i] += e.reservoir;
   gas.feedback_hot_energy[i] = e.hot;
@@ -33,13 +35,13 @@ void find_hot_neighbours(StepContext& ctx, FeedbackState& fb, int c) {
   for (FeedbackSite& site : cf.sites) {
     const std::vector<std::size_t> hot =
         nearest(ctx.space, gas, gas.x[site.particle], site.particle, k, fb.params.max_search_radius,
-                [&](std::size_t j) { return gas.mass[j] > 0.0 && !fb.is_cold(gas, j); });
+                [&](std::size_t j) { return gas.mass[j] > 0.0 && !fb.is_cold(ctx, j); });
     site.first = cf.neighbours.size();
     site.count = hot.size();
     double t_sum = 0.0;
     for (std::size_t j : hot) {
       cf.neighbours.push_back(j);
-      t_sum += fb.temperature(gas.u[j]);
+      t_sum += fb.temperature(ctx.expansion.energy(gas.u[j]));
     }
     site.mean_hot_temperature = hot.empty() ? -1.0 : t_sum / static_cast<double>(hot.size());
   }
@@ -60,14 +62,15 @@ void apply_feedback(StepContext& ctx, FeedbackState& fb, const std::vector<int>&
           for (std::size_t n = 0; n < site.count; ++n) {
             const std::size_t j = cf.neighbours[site.first + n];
             // Energy in proportion to mass: every hot neighbour gets the same du.
-            const double du = e_hot / m_sum;
+            const double du = ctx.expansion.code_energy(e_hot / m_sum);
             gas.u[j] += du;
             gas.u_full[j] += du;
             if (ctx.hydro.timestep_limiter) gas.wake_bin[j] = std::min(gas.wake_bin[j], gas.time_bin[i]);
           }
         } else {
-          gas.u[i] += e_hot / gas.mass[i];
-          gas.u_full[i] += e_hot / gas.mass[i];
+          const double du = ctx.expansion.code_energy(e_hot / gas.mass[i]);
+          gas.u[i] += du;
+          gas.u_full[i] += du;
           ++fb.step_tally.hot_without_neighbours;
         }
         gas.feedback_hot_energy[i] = 0.0;
@@ -76,7 +79,8 @@ void apply_feedback(StepContext& ctx, FeedbackState& fb, const std::vector<int>&
         const double t_prom =
             promotion_temperature(fb.t_star, p.promotion_factor, p.promotion_hot_factor,
                                   site.mean_hot_temperature);
-        if (gas.u_full[i] + gas.reservoir[i] / gas.mass[i] >= fb.energy_at(t_prom)) promote(ctx, fb, i);
+        if (ctx.expansion.energy(gas.u_full[i]) + gas.reservoir[i] / gas.mass[i] >= fb.energy_at(t_prom))
+          promote(ctx, fb, i);
       }
     }
     // Sites live for one step: an inactive cell must not hand its old ones out again.
@@ -88,7 +92,7 @@ void apply_feedback(StepContext& ctx, FeedbackState& fb, const std::vector<int>&
 void promote(StepContext& ctx, FeedbackState& fb, std::size_t i) {
   GasParticles& gas = ctx.gas;
   StarFormationTally& tally = fb.step_tally;
-  const double du = gas.reservoir[i] / gas.mass[i];
+  const double du = ctx.expansion.code_energy(gas.reservoir[i] / gas.mass[i]);
   gas.u_full[i] += du;
   gas.u[i] += du;
   tally.energy_released += gas.reservoir[i];
@@ -99,16 +103,18 @@ void promote(StepContext& ctx, FeedbackState& fb, std::size_t i) {
   ++tally.promotions;
   // Its hidden stars stay with the cold phase: the cold neighbours within h take them.
   const double hidden = gas.mass_stars_hidden[i];
+  double kinetic_to_heat = 0.0;  // a^2 the physical energy in a comoving run
   if (hidden > 0.0 &&
       hydro::share_among_neighbours(ctx.space, gas, i, 0.0, hidden, 0.0,
-                                    [&](std::size_t j) { return fb.is_cold(gas, j); }, tally.kinetic_to_heat))
+                                    [&](std::size_t j) { return fb.is_cold(ctx, j); }, kinetic_to_heat))
     gas.mass_stars_hidden[i] = 0.0;
+  tally.kinetic_to_heat += ctx.expansion.energy(kinetic_to_heat);
   // The density from the hot phase alone: h solved again over the non-cold neighbours, so
   // the particle sees N_ngb of them (however far) and the MSPH rule reads this from now on.
   const double n_ngb = ctx.hydro.neighbours;
   const std::vector<std::size_t> hot =
       nearest(ctx.space, gas, gas.x[i], i, static_cast<std::size_t>(4.0 * n_ngb), 0.0,
-              [&](std::size_t j) { return gas.mass[j] > 0.0 && !fb.is_cold(gas, j); });
+              [&](std::size_t j) { return gas.mass[j] > 0.0 && !fb.is_cold(ctx, j); });
   if (hot.empty()) return;  // nothing but cold gas anywhere: keep the density it has
   std::vector<double> r(hot.size());
   for (std::size_t n = 0; n < hot.size(); ++n) r[n] = norm(ctx.space.separation(gas.x[hot[n]], gas.x[i]));

@@ -38,14 +38,17 @@ struct FeedbackState {
   std::function<double(double)> energy_at;            // u of temperature T (K)
   std::vector<CellFeedback> cells;                    // indexed by cell
   StarFormationTally step_tally;                      // the apply task's share
-  double time = 0.0;                                  // current simulation time (for promotion times)
+  double time = 0.0;                                  // promotion times: t, or a in comoving runs
 
-  bool is_cold(const GasParticles& gas, std::size_t j) const { return cold.contains(gas.rho[j], gas.u[j]); }
+  // The phases are physical: a comoving run compares rho' / a^3 and u' / a^2.
+  bool is_cold(const StepContext& ctx, std::size_t j) const {
+    return cold.contains(ctx.expansion.density(ctx.gas.rho[j]), ctx.expansion.energy(ctx.gas.u[j]));
+  }
 };
 
 // Called by star formation for active particle i of leaf c as it converts dm into stars: the
 // particle's own share heats it now, eps_c fills its reservoir and eps_h waits for the apply task.
-void deposit(const FeedbackState& fb, GasParticles& gas, std::size_t i, double dm, CellFeedback& cf);
+void deposit(StepContext& ctx, const FeedbackState& fb, std::size_t i, double dm, CellFeedback& cf);
 // Lists active particle i as a site of its cell when it has energy to hand out or a reservoir.
 void list_site(const FeedbackState& fb, const GasParticles& gas, std::size_t i, CellFeedback& cf);
 

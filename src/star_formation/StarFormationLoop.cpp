@@ -17,16 +17,19 @@ void form_stars(StepContext& ctx, const StarFormationState& sf, feedback::Feedba
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
     gas.feedback_hot_energy[i] = 0.0;  // none for the hot neighbours unless it forms stars now
-    const double dt = ctx.timeline.step(gas.time_bin[i]);
-    const GasState s{gas.div_v[i], gas.rho[i], gas.h[i], hydro::sound_speed(gas.rho[i], gas.u[i], ctx.hydro.gamma),
-                     sf.temperature(gas.u[i])};
+    // The conditions and the rate are physical (comoving: at the step's start, where the
+    // forces were computed), over the step's cosmic time.
+    const StepContext::Expansion& e = ctx.expansion;
+    const double dt = ctx.step_span(gas.time_bin[i]).time;
+    const GasState s{e.divergence(gas.div_v[i]), e.density(gas.rho[i]), e.length(gas.h[i]),
+                     e.speed(hydro::sound_speed(gas.rho[i], gas.u[i], ctx.hydro.gamma)), sf.temperature(e.energy(gas.u[i]))};
     if (dt > 0.0 && sf.law.check(s) == Eligibility::Eligible) {
-      const double dm = sf.law.mass_formed(gas.mass[i], gas.rho[i], dt);
+      const double dm = sf.law.mass_formed(gas.mass[i], s.rho, dt);
       gas.mass[i] -= dm;
       gas.mass_stars_hidden[i] += dm;
       cf.tally.mass_formed += dm;
-      cf.tally.thermal_locked += dm * gas.u_full[i];
-      feedback::deposit(fb, gas, i, dm, cf);
+      cf.tally.thermal_locked += dm * e.energy(gas.u_full[i]);
+      feedback::deposit(ctx, fb, i, dm, cf);
     }
     feedback::list_site(fb, gas, i, cf);
   }
@@ -45,9 +48,14 @@ bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t&
     if (!(gas.mass[i] > 0.0)) continue;
     const double m0 = gas.mass_initial[i];
     if (gas.mass_stars_hidden[i] >= p.spawn_fraction * m0 * (1.0 - 1e-12)) {
-      // The star starts half-kicked by gravity alone over the parent's current step.
-      const double half = 0.5 * ctx.timeline.step(gas.time_bin[i]);
-      const Vec3 v_full = gas.v_full[i] - gas.a_hydro[i] * half;
+      // The star starts half-kicked by gravity alone over the parent's current step: the
+      // hydro part of its opening kick is taken back (comoving: with the hydro factor).
+      const IntegerTime begin = gas.ti_begin[i];
+      const double half_hydro =
+          ctx.comoving ? ctx.comoving->hydro_kick(static_cast<double>(begin),
+                                                  static_cast<double>(begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(gas.time_bin[i])))
+                       : 0.5 * ctx.timeline.step(gas.time_bin[i]);
+      const Vec3 v_full = gas.v_full[i] - gas.a_hydro[i] * half_hydro;
       stars.push_back(next_id++, Species::Star, gas.mass_stars_hidden[i], gas.x[i], v_full, gas.v[i], sf.time,
                       gas.id[i]);
       const std::size_t s = stars.size() - 1;
@@ -62,9 +70,13 @@ bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t&
       changed = true;
     }
     if (gas.mass[i] <= p.dissolve_fraction * m0 * (1.0 + 1e-12)) {
-      const bool shared =
-          hydro::share_among_neighbours(ctx.space, gas, i, gas.mass[i], gas.mass_stars_hidden[i], gas.reservoir[i],
-                                        [](std::size_t) { return true; }, tally.kinetic_to_heat);
+      // The reservoir is physical energy; the particles' u' take a^2 of it, and the kinetic
+      // energy their merger turns to heat is a^2 the physical one (v' = a v_pec).
+      double kinetic_to_heat = 0.0;
+      const bool shared = hydro::share_among_neighbours(ctx.space, gas, i, gas.mass[i], gas.mass_stars_hidden[i],
+                                                        ctx.expansion.code_energy(gas.reservoir[i]),
+                                                        [](std::size_t) { return true; }, kinetic_to_heat);
+      tally.kinetic_to_heat += ctx.expansion.energy(kinetic_to_heat);
       if (shared) {
         tally.energy_released += gas.reservoir[i];
         gas.mass[i] = 0.0;

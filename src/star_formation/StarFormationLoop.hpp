@@ -17,7 +17,7 @@ struct StarFormationState {
   StarFormationLaw law;
   TemperatureOf temperature;        // T (K) of specific energy u
   StarFormationTally step_tally;    // spawning's and dissolving's share
-  double time = 0.0;                // current simulation time (stars' birth times)
+  double time = 0.0;                // stars' birth times: t, or a in comoving runs
 };
 
 // Task: the active gas of leaf c converts mass over its coming step; the feedback of what

@@ -65,6 +65,16 @@ struct StepContext {
     double a = 1.0;
     double hubble = 0.0;       // H(a), internal units
     double hubble_flow = 0.0;  // a^2 H: the Hubble flow's part of v' per comoving length
+
+    // Sub-grid physics reads physical values (docs/physics.md §11, "Sub-grid physics"):
+    // rho = rho' / a^3, u = u' / a^2 (gamma = 5/3), h = a h', c = c' / a,
+    // div v = D' / a^2 + 3 H; a heating du changes u' by a^2 du. All identities in plain runs.
+    double density(double rho_comoving) const { return rho_comoving / (a * a * a); }
+    double energy(double u_comoving) const { return u_comoving / (a * a); }
+    double code_energy(double u_physical) const { return u_physical * a * a; }
+    double length(double h_comoving) const { return a * h_comoving; }
+    double speed(double c_comoving) const { return c_comoving / a; }
+    double divergence(double d_comoving) const { return d_comoving / (a * a) + 3.0 * hubble; }
   };
   Expansion expansion{};
   // The factor on every comoving softening at ti_current (GravityParams::softening_factor;
@@ -96,6 +106,12 @@ struct StepContext {
   MeshStep mesh_step{};
   // Whether this step's gravity computes the mesh (every force without a mesh step).
   bool mesh_due() const { return !mesh_step.active() || mesh_step.due; }
+  // A step of `bin` from ti_current: its cosmic time, which sub-grid rates integrate over,
+  // and the energy equation's factor (int dt / a^2 comoving; both the step in plain runs).
+  struct StepSpan {
+    double time, energy;
+  };
+  StepSpan step_span(int bin) const;
   // Sets ti_current and the expansion there.
   void set_time(IntegerTime ti);
   // x += v_full * drift_factor over [t0, t1]: the interval itself, or comoving, int dt / a^2.

@@ -25,6 +25,15 @@ void StepContext::set_time(IntegerTime ti) {
   softening_factor = gravity.softening_factor(expansion.a);
 }
 
+StepContext::StepSpan StepContext::step_span(int bin) const {
+  if (!comoving) {
+    const double dt = timeline.step(bin);
+    return {dt, dt};
+  }
+  const double begin = static_cast<double>(ti_current), end = begin + static_cast<double>(TimeLine::step_ticks(bin));
+  return {comoving->cosmic_time(begin, end), comoving->drift(begin, end)};
+}
+
 double StepContext::softening_gas() const { return softening_factor * gravity.softening_gas; }
 double StepContext::softening_of(std::size_t j) const {
   return softening_factor * gravity.softening(dm.species[j], dm.mass[j]);
@@ -161,7 +170,8 @@ void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
       gas.u[i] = kicked_energy(ctx, u_before, gas.du_dt[i], k.energy);
       // A safety net, as in the closing kick: the prediction never takes u below half of
       // the smaller of its value and the cooling floor, whatever changed the particle mid-step.
-      if (ctx.cooling) gas.u[i] = std::max(gas.u[i], 0.5 * std::min(u_before, ctx.cooling->floor_energy()));
+      if (ctx.cooling)
+        gas.u[i] = std::max(gas.u[i], 0.5 * std::min(u_before, ctx.expansion.code_energy(ctx.cooling->floor_energy())));
       // The prediction keeps to the floor the ghost holds (hydro.h_min_ratio).
       gas.h[i] = std::max(gas.h[i] * bounded_exp(gas.div_v[i] * dt / 3.0), ctx.hydro.h_min);
       gas.rho[i] *= bounded_exp(-gas.div_v[i] * dt);
@@ -196,33 +206,29 @@ void kick_close(StepContext& ctx, int c) {
     // Half of the step that ends now (shorter than its bin's if the particle was woken).
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
+      // Comoving: each term with its own factor from the step's midpoint (energy: int dt / a^2).
+      const KickFactors k = ctx.comoving ? closing_half(ctx, gas.ti_begin[i]) : KickFactors{dt, dt, dt};
       if (ctx.comoving) {
-        const KickFactors k = closing_half(ctx, gas.ti_begin[i]);
         gas.v_full[i] += gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
         mesh_close_kick(ctx, gas.v_full[i], gas.a_mesh[i]);
-        // No cooling in comoving runs (yet); hydro alone never halves u in one kick (GADGET).
-        const double u_half = gas.u_full[i];
-        gas.u_full[i] = std::max(u_half + gas.du_dt[i] * k.energy, 0.5 * u_half);
-        gas.v[i] = predicted_velocity(ctx, gas.v_full[i], gas.a_mesh[i]);
-        gas.u[i] = gas.u_full[i];
-        continue;
+      } else {
+        gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       }
-      gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
       // du_dt is now the hydro rate at the step's end (the force loop just reset it); the
       // cooling part of the step being closed was set at its start and applies to this half too.
       const double u_half = gas.u_full[i];
-      double u = u_half + gas.du_dt[i] * dt;
+      double u = u_half + gas.du_dt[i] * k.energy;
       if (u < 0.5 * u_half) u = 0.5 * u_half;  // hydro alone never halves u in one kick (GADGET)
       if (ctx.cooling) {
-        u += gas.du_dt_cool[i] * dt;
-        cell.radiated -= gas.mass[i] * gas.du_dt_cool[i] * dt;
+        u += gas.du_dt_cool[i] * k.energy;
+        cell.radiated -= gas.mass[i] * ctx.expansion.energy(gas.du_dt_cool[i] * k.energy);
         // A safety net only: the implicit solve ends the step near its solution (> the 1e4 K
         // energy); a hydro rate that changed sign during the step could otherwise overshoot.
-        u = std::max(u, 0.5 * std::min(u_half, ctx.cooling->floor_energy()));
+        u = std::max(u, 0.5 * std::min(u_half, ctx.expansion.code_energy(ctx.cooling->floor_energy())));
       }
       gas.u_full[i] = u;
     }
-    gas.v[i] = gas.v_full[i];
+    gas.v[i] = predicted_velocity(ctx, gas.v_full[i], gas.a_mesh[i]);
     gas.u[i] = gas.u_full[i];
   }
   CollisionlessParticles& dm = ctx.dm;
@@ -316,6 +322,7 @@ void kick_open(StepContext& ctx, int c) {
         gas.v_full[i] += gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
         mesh_open_kick(ctx, gas.v_full[i], gas.a_mesh[i]);
         gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], k.energy);
+        cell.radiated -= gas.mass[i] * ctx.expansion.energy(gas.du_dt_cool[i] * k.energy);
       } else {
         const double dt = 0.5 * ctx.timeline.step(gas.time_bin[i]);
         gas.v_full[i] += (gas.a_hydro[i] + gas.a_grav[i]) * dt;
@@ -355,6 +362,7 @@ void wake(StepContext& ctx, int c) {
                                           0.5 * (begin + static_cast<double>(old_end)));
       gas.v_full[i] -= gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
       gas.u_full[i] -= gas.du_dt[i] * k.energy;
+      cell.radiated += gas.mass[i] * ctx.expansion.energy(gas.du_dt_cool[i] * k.energy);
     } else {
       const double undo = 0.5 * ctx.timeline.kick_factor(new_end, old_end);
       gas.v_full[i] -= (gas.a_hydro[i] + gas.a_grav[i]) * undo;
