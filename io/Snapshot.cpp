@@ -176,12 +176,17 @@ ComovingStorage comoving_storage(const std::string& name, const Dimensions& d, d
   return {0.0, a_power(d, gamma)};
 }
 
-void write_dataset_units(File& file, const std::string& dataset, const SnapshotInfo& info, const Dimensions& d,
-                         const std::string& description) {
+void write_dataset_units(File& file, const std::string& dataset, const SnapshotInfo& info, const Dimensions& field,
+                         const std::string& field_description) {
   const Units& units = info.units;
+  // A comoving run's clock is the scale factor: the times it stamps (stars' births,
+  // promotions) are values of a, dimensionless.
+  const std::string name = dataset.substr(dataset.rfind('/') + 1);
+  const bool scale_factors = info.cosmology && (name == "BirthTime" || name == "PromotionTime");
+  const Dimensions d = scale_factors ? Dimensions{} : field;
+  const std::string description = scale_factors ? field_description + " (scale factors a)" : field_description;
   const double factor = std::pow(units.mass_cgs, d.mass) * std::pow(units.length_cgs, d.length) *
                         std::pow(units.time_cgs(), d.time);
-  const std::string name = dataset.substr(dataset.rfind('/') + 1);
   // h-scaled units (comoving runs): lengths, masses and times are per h.
   const double h_exponent = info.cosmology ? -(d.mass + d.length + d.time) : 0.0;
   const double a_exponent =

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include <algorithm>
 #include <array>
 #include <filesystem>
@@ -190,9 +192,12 @@ void start_engine(Engine& engine, const RunStart& start, const ParameterFile& pa
   engine.set_star_formation_total(state.star_formation);
   if (state.next_particle_id > 0) engine.set_next_particle_id(state.next_particle_id);
   // A file written inside a step holds its end; the run goes on from the step's start.
+  // (A comoving run's timeline reads ln a: it says a.)
+  const double begin = engine.timeline().time(state.ti_step_begin);
   if (!quiet)
-    fmt::print(stderr, "restarted from {} at t = {:.6g}, step {}\n", restart_path(params),
-               engine.timeline().time(state.ti_step_begin), engine.steps());
+    fmt::print(stderr, "restarted from {} at {} = {:.6g}, step {}\n", restart_path(params),
+               engine.config().comoving.enabled ? "a" : "t", engine.config().comoving.enabled ? std::exp(begin) : begin,
+               engine.steps());
 }
 
 }  // namespace fountain
