@@ -4,7 +4,7 @@
 # neither the engine nor the app, and feedback nothing of star formation; the step's context and
 # clock (src/step) include no physics; the task machinery (tasks/) includes no physics, io,
 # engine or app; io/ and domain/ nothing of the engine or the app; space, particles and core no
-# layer above them. Usage: check_layers.sh REPO_ROOT
+# layer above them; the group finders (src/groups) nothing of a run. Usage: check_layers.sh REPO_ROOT
 set -eu
 root=${1:?repo root}
 cd "$root"
@@ -34,6 +34,8 @@ rule tasks $physics step engine app io space particles analysis ics domain param
 rule io engine app
 # shellcheck disable=SC2086
 for layer in space particles core; do rule "src/$layer" $physics step engine app io analysis ics domain; done
+# The group finders work on particle sets, not on a run: no engine, app, io or step.
+rule src/groups engine app io step hydro cooling star_formation feedback timestep domain
 # The expanding background is a function of a alone: it sits with core, below everything.
 # shellcheck disable=SC2086
 rule src/cosmology $physics step engine app io analysis ics domain space particles
