@@ -451,6 +451,18 @@ void File::write_dataset(const std::string& dataset, const std::vector<std::uint
   write_numeric_dataset(dataset, H5T_STD_U64LE, H5T_NATIVE_UINT64, {values.size()}, values.data(), attributes);
 }
 
+void File::write_table(const std::string& dataset, const std::vector<double>& values, std::size_t columns,
+                       const StringAttributes& attributes) {
+  write_numeric_dataset(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {values.size() / columns, columns}, values.data(),
+                        attributes);
+}
+
+void File::write_table(const std::string& dataset, const std::vector<std::uint64_t>& values, std::size_t columns,
+                       const StringAttributes& attributes) {
+  write_numeric_dataset(dataset, H5T_STD_U64LE, H5T_NATIVE_UINT64, {values.size() / columns, columns}, values.data(),
+                        attributes);
+}
+
 void File::write_dataset(const std::string& dataset, const std::vector<std::int32_t>& values,
                          const StringAttributes& attributes) {
   write_numeric_dataset(dataset, H5T_STD_I32LE, H5T_NATIVE_INT32, {values.size()}, values.data(), attributes);

@@ -127,6 +127,11 @@ class File {
                      const StringAttributes& attributes = {});
   void write_dataset(const std::string& dataset, const std::vector<std::int32_t>& values,
                      const StringAttributes& attributes = {});
+  // Two-dimensional tables, row-major, `columns` values per row (GADGET's GroupMassType).
+  void write_table(const std::string& dataset, const std::vector<double>& values, std::size_t columns,
+                   const StringAttributes& attributes = {});
+  void write_table(const std::string& dataset, const std::vector<std::uint64_t>& values, std::size_t columns,
+                   const StringAttributes& attributes = {});
   // A scalar fixed-length string dataset (for long texts that do not fit an attribute).
   void write_string_dataset(const std::string& dataset, const std::string& text);
 

@@ -364,6 +364,63 @@ with h5py.File('outA/snapshot_0002.hdf5', 'r') as f:
       head -1 restart.txt
       "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0002.hdf5 outB/snapshot_0002.hdf5
     fi ;;
+  fof_catalogue)
+    # `fountain fof` on a dark matter snapshot written to GADGET's layout: two Plummer clumps
+    # (one across the box's corner) in a uniform background. Two groups, the larger first, the
+    # linking length 0.2 of the mean spacing (from the mean mass and Omega_m rho_crit0), the
+    # same catalogue on 1 and 2 threads; bad input is named.
+    "$python" - <<'EOT'
+import h5py, numpy as np
+rng = np.random.default_rng(4)
+box, n_bg = 10.0, 4096
+def plummer(n, b):
+    r = b / np.sqrt(rng.random(n) ** (-2.0 / 3.0) - 1.0)
+    r = r[r < 10 * b][: n]
+    v = rng.normal(size=(len(r), 3))
+    return v / np.linalg.norm(v, axis=1)[:, None] * r[:, None]
+x = np.concatenate([rng.random((n_bg, 3)) * box, plummer(3000, 0.05) + 5.0, plummer(2000, 0.04)]) % box
+n = len(x)
+rho_crit = 3 * 100.0**2 / (8 * np.pi * 4.300917270069976e-09)
+m = 0.3 * rho_crit * box**3 / n
+with h5py.File('dm.hdf5', 'w') as f:
+    h = f.create_group('Header')
+    h.attrs['NumPart_ThisFile'] = np.array([0, n, 0, 0, 0, 0], dtype=np.uint64)
+    h.attrs['MassTable'] = np.array([0, m, 0, 0, 0, 0], dtype=float)
+    h.attrs['BoxSize'] = box
+    h.attrs['Time'] = 1.0
+    h.attrs['Omega0'] = 0.3
+    h.attrs['OmegaLambda'] = 0.7
+    h.attrs['HubbleParam'] = 0.7
+    g = f.create_group('PartType1')
+    g['Coordinates'] = x
+    g['Velocities'] = np.zeros_like(x)
+    g['ParticleIDs'] = np.arange(1, n + 1, dtype=np.uint64)
+EOT
+    "$bin" fof dm.hdf5 -o g1.hdf5 -t 1 > fof1.txt 2>&1 || { cat fof1.txt; fail "fof on 1 thread"; }
+    "$bin" fof dm.hdf5 -o g2.hdf5 -t 2 > fof2.txt 2>&1 || { cat fof2.txt; fail "fof on 2 threads"; }
+    cat fof2.txt
+    "$python" - <<'EOT' || fail "the catalogue is wrong"
+import h5py, numpy as np, sys
+a, b = h5py.File('g1.hdf5', 'r'), h5py.File('g2.hdf5', 'r')
+n = a['Header'].attrs['Ngroups_Total']
+spacing = 10.0 / h5py.File('dm.hdf5', 'r')['Header'].attrs['NumPart_ThisFile'][1] ** (1 / 3)
+ok = n == 2 and abs(a['Header'].attrs['LinkingLength'] / (0.2 * spacing) - 1) < 1e-5
+length = a['Group/GroupLen'][:]
+ok = ok and length[0] > length[1] > 1500 and length[0] > 2500
+pos = a['Group/GroupPos'][:]
+ok = ok and np.abs(pos[0] - 5.0).max() < 0.05 and np.abs((pos[1] + 5) % 10 - 5).max() < 0.05
+for name in ['Group/GroupLen', 'Group/GroupMass', 'Group/GroupPos', 'Group/Group_M_Crit200', 'IDs/ID']:
+    ok = ok and np.array_equal(a[name][:], b[name][:])
+sys.exit(0 if ok else 1)
+EOT
+    set +e
+    "$bin" fof nothere.hdf5 -o g.hdf5 > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "nothere.hdf5" bad.txt || { cat bad.txt; fail "a missing snapshot was not named"; }
+    set +e
+    "$bin" fof dm.hdf5 -o g.hdf5 -b 0.2 --linking-length 0.1 > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "give one" bad.txt || { cat bad.txt; fail "two linking lengths were not refused"; } ;;
   ic_cosmo_run)
     # Fountain's own cosmological box (2 x 8^3, 2LPT, z = 49) runs comovingly with the
     # cosmology it was made for, and refuses another; bad options are named.

@@ -6,6 +6,7 @@
 #include <string_view>
 #include <vector>
 
+#include "app/GroupCommand.hpp"
 #include "app/IcCommand.hpp"
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
@@ -15,7 +16,7 @@
 
 namespace {
 
-constexpr const char* kCommands[] = {"run", "ic", "params"};
+constexpr const char* kCommands[] = {"run", "ic", "fof", "params"};
 
 // CLI11 answers an unknown first word with "A subcommand is required": name it instead.
 bool is_unknown_command(int argc, char** argv) {
@@ -93,10 +94,27 @@ int main(int argc, char** argv) {
           ->capture_default_str(),
       ic->add_flag("--no-gas", no_gas, "cosmo: dark matter only")};
 
+  auto* fof = app.add_subcommand("fof", "Friends-of-friends groups of a snapshot, written as an HDF5 catalogue");
+  FofRequest fof_request;
+  fof->add_option("snapshot", fof_request.snapshot, "Snapshot (GADGET-layout HDF5)")->required();
+  fof->add_option("-o,--output", fof_request.output, "Catalogue to write (HDF5)")->required();
+  fof->add_option("-b", fof_request.b, "Linking length in mean spacings of the linking particles (from their mean mass "
+                                       "and the mean density of dark matter)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  auto* fof_length = fof->add_option("--linking-length", fof_request.linking_length,
+                                     "Comoving linking length instead (needed for non-cosmological snapshots)")
+                         ->check(CLI::PositiveNumber);
+  fof->add_option("--link-types", fof_request.linking_types,
+                  "GADGET types that link (the others join their nearest linked particle within the linking length)")
+      ->capture_default_str();
+  fof->add_option("--min-members", fof_request.min_members, "Linking particles a group needs")->capture_default_str();
+  fof->add_option("-t,--threads", fof_request.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
   if (is_unknown_command(argc, argv)) {
-    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, params (fountain --help explains them)\n",
+    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, fof, params (fountain --help explains them)\n",
                argv[1]);
     return 2;
   }
@@ -181,6 +199,10 @@ int main(int argc, char** argv) {
                                      "it (the run's hydro.gamma sets it)",
                                      request.problem));
       fmt::print(stderr, "{}\n", write_ic(request));
+    } else if (*fof) {
+      if (fof_length->count() > 0 && fof->get_option("-b")->count() > 0)
+        throw InputError("options -b and --linking-length both set the linking length: give one");
+      fmt::print(stderr, "{}\n", find_groups(fof_request));
     } else if (*params_cmd) {
       fmt::print("{}", parameter_reference_markdown());
     }
