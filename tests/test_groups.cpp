@@ -12,6 +12,8 @@
 
 #include "groups/FofCatalogue.hpp"
 #include "groups/FriendsOfFriends.hpp"
+#include "groups/Hop.hpp"
+#include "groups/NearestNeighbours.hpp"
 
 namespace fountain::groups {
 namespace {
@@ -197,6 +199,123 @@ TEST(FofCatalogue, LinkingLengthOfThePapersZoom) {
   // COSMOLOGY.md C9.1: b = 0.2, mean high-resolution dark matter mass 6.7251e8 Msun/h,
   // (Omega_m - Omega_b) rho_crit0 = 0.27 x 2.775366e11: l = 0.04156 Mpc/h.
   EXPECT_NEAR(linking_length(0.2, 6.7251e8, 0.27 * 2.775366e11), 0.04156, 5e-5);
+}
+
+// ---- HOP ----------------------------------------------------------------------------------
+
+double spline(double r, double h) {
+  const double q = r / h, c = 1.0 / (std::numbers::pi * h * h * h);
+  return q < 1.0 ? c * (1.0 - 1.5 * q * q + 0.75 * q * q * q) : q < 2.0 ? c * 0.25 * std::pow(2.0 - q, 3) : 0.0;
+}
+
+TEST(NearestNeighbours, MatchSortedDistances) {
+  const std::vector<Vec3> x = point_set(2000, 1.0, true, 21);
+  for (const double box : {0.0, 1.0}) {
+    const NearestNeighbours tree(x, box);
+    for (std::size_t i = 0; i < x.size(); i += 37) {
+      std::vector<NearestNeighbours::Neighbour> all;
+      for (std::size_t j = 0; j < x.size(); ++j) {
+        const Vec3 d = image(x[i], x[j], box);
+        all.push_back({dot(d, d), static_cast<std::uint32_t>(j)});
+      }
+      std::sort(all.begin(), all.end());
+      const auto found = tree.nearest(x[i], 50);
+      ASSERT_EQ(found.size(), 50u);
+      for (std::size_t k = 0; k < 50; ++k) ASSERT_EQ(found[k].index, all[k].index) << "particle " << i << ", neighbour " << k;
+    }
+  }
+}
+
+// COSMOLOGY.md C10.10: HOP's densities against the O(N^2) sum of C9.2 step 1, to 1e-12.
+TEST(Hop, DensitiesMatchBruteForce) {
+  const std::vector<Vec3> x = point_set(1500, 1.0, true, 17);
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(0.5, 1.5);
+  std::vector<double> m(x.size());
+  for (double& mi : m) mi = u(rng);
+  for (const double box : {0.0, 1.0}) {
+    const int n_dens = 64;
+    const std::vector<double> rho = hop_densities(x, m, n_dens, box);
+    std::vector<double> h(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      std::vector<double> d2;
+      for (std::size_t j = 0; j < x.size(); ++j) d2.push_back(dot(image(x[i], x[j], box), image(x[i], x[j], box)));
+      std::nth_element(d2.begin(), d2.begin() + n_dens - 1, d2.end());
+      h[i] = 0.5 * std::sqrt(d2[n_dens - 1]);
+    }
+    double worst = 0.0;
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      double exact = 0.0;
+      for (std::size_t j = 0; j < x.size(); ++j) {
+        const double r = norm(image(x[i], x[j], box));
+        exact += 0.5 * m[j] * (spline(r, h[i]) + spline(r, h[j]));
+      }
+      worst = std::max(worst, std::fabs(rho[i] / exact - 1.0));
+    }
+    std::printf("HOP densities, %s box: largest relative difference from the direct sum %.1e\n", box > 0.0 ? "periodic" : "open", worst);
+    EXPECT_LT(worst, 1e-12);
+  }
+}
+
+// COSMOLOGY.md C10.10: two Plummer spheres (M = b = 1, 20,000 particles each within 30 b)
+// 6 b apart. The saddle density between them is rho_s = 2 rho(3) = 1.50988e-3. With the
+// thresholds (outer, saddle, peak) = (0.2, 0.5, 0.6) rho_s they are one group of the mass
+// above the outer density, 2 M(< r_o) = 1.796; with (0.8, 2.0, 2.4) rho_s two, each of
+// M(< 2.699) = 0.825 (M(< r) = M r^3 / (r^2 + b^2)^(3/2), rho(r_o) = delta_outer).
+TEST(Hop, TwoPlummerSpheresMergeOrSplitAtTheSaddle) {
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec3> x;
+  for (const double centre : {-3.0, 3.0}) {
+    std::size_t made = 0;
+    while (made < 20000) {
+      const double r = 1.0 / std::sqrt(std::pow(u(rng), -2.0 / 3.0) - 1.0);
+      if (r > 30.0) continue;
+      const double z = 2.0 * u(rng) - 1.0, phi = 2.0 * std::numbers::pi * u(rng), s = std::sqrt(1.0 - z * z);
+      x.push_back(Vec3{centre + r * s * std::cos(phi), r * s * std::sin(phi), r * z});
+      ++made;
+    }
+  }
+  const std::vector<double> m(x.size(), 1.0 / 20000.0);
+  const double rho_s = 1.50988e-3;
+  struct Case {
+    double outer, saddle, peak;
+    std::vector<double> masses;
+  };
+  for (const Case& c : {Case{0.2, 0.5, 0.6, {1.796}}, Case{0.8, 2.0, 2.4, {0.825, 0.825}}}) {
+    HopParameters p;
+    p.delta_outer = c.outer * rho_s;
+    p.delta_saddle = c.saddle * rho_s;
+    p.delta_peak = c.peak * rho_s;
+    const HopResult r = find_hop_groups(x, m, p);
+    std::printf("HOP at (%.1f, %.1f, %.1f) rho_s: %zu groups;", c.outer, c.saddle, c.peak, r.groups.size());
+    for (const HopGroup& g : r.groups) std::printf(" %.4f (%zu particles)", g.mass, g.members.size());
+    std::printf("\n");
+    ASSERT_EQ(r.groups.size(), c.masses.size());
+    for (std::size_t k = 0; k < c.masses.size(); ++k) EXPECT_NEAR(r.groups[k].mass / c.masses[k], 1.0, 0.06);
+  }
+}
+
+TEST(Hop, SameGroupsOnOneAndTwoThreads) {
+  const std::vector<Vec3> x = point_set(20000, 1.0, true, 23);
+  const std::vector<double> m(x.size(), 1.0);
+  HopParameters p;
+  p.box = 1.0;
+  p.delta_outer = 10.0 * 20000.0;  // ten times the mean density: the clumps
+  p.delta_saddle = 2.5 * p.delta_outer;
+  p.delta_peak = 3.0 * p.delta_outer;
+  HopResult one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = find_hop_groups(x, m, p);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = find_hop_groups(x, m, p);
+  }
+  EXPECT_GT(one.groups.size(), 3u);
+  EXPECT_EQ(one.density, two.density);
+  EXPECT_EQ(one.group, two.group);
 }
 
 }  // namespace
