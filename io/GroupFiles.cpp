@@ -157,4 +157,84 @@ void write_fof_catalogue(const std::string& path, const std::vector<groups::Grou
   f.write_dataset("/IDs/Type", member_type, {{"Description", "GADGET particle type of each member"}});
 }
 
+void write_hop_catalogue(const std::string& path, const groups::HopResult& hop, const std::vector<std::uint32_t>& members,
+                         const std::vector<double>& hop_mass, const GroupInput& input, const HopCatalogueInfo& info) {
+  hdf5::File f(path, hdf5::File::Mode::create);
+  const groups::ParticleSet& set = input.particles;
+  const std::size_t n = hop.groups.size();
+  std::vector<std::uint64_t> len(n), offset(n), len_type(6 * n), ids;
+  std::vector<double> mass(n), mass_type(6 * n), peak_density(n), density;
+  std::vector<Vec3> cm(n), peak(n), vel(n);
+  std::vector<std::int32_t> member_type;
+  const double box = input.box;
+  for (std::size_t g = 0; g < n; ++g) {
+    const groups::HopGroup& group = hop.groups[g];
+    len[g] = group.members.size();
+    offset[g] = ids.size();
+    const Vec3 reference = set.x[members[group.peak]];
+    Vec3 moment{}, momentum{};
+    for (std::uint32_t k : group.members) {
+      const std::uint32_t i = members[k];
+      const auto t = static_cast<std::size_t>(set.type[i]);
+      ++len_type[6 * g + t];
+      // Gas carries its hidden stars: its set mass under type 0, the hidden part under type 4.
+      mass_type[6 * g + t] += set.mass[i];
+      if (hop_mass[k] > set.mass[i]) mass_type[6 * g + 4] += hop_mass[k] - set.mass[i];
+      Vec3 d = set.x[i] - reference;
+      if (box > 0.0)
+        for (int c = 0; c < 3; ++c) d[c] -= box * std::nearbyint(d[c] / box);
+      moment += d * hop_mass[k];
+      momentum += set.v[i] * hop_mass[k];
+      ids.push_back(set.id[i]);
+      member_type.push_back(set.type[i]);
+      density.push_back(hop.density[k]);
+    }
+    mass[g] = group.mass;
+    Vec3 c = reference + moment * (1.0 / group.mass);
+    if (box > 0.0)
+      for (int k = 0; k < 3; ++k) c[k] -= box * std::floor(c[k] / box);
+    cm[g] = c;
+    peak[g] = reference;
+    peak_density[g] = group.peak_density;
+    vel[g] = momentum * (1.0 / group.mass);
+  }
+  const groups::HopParameters& p = info.parameters;
+  f.create_group(kHeader);
+  f.write_attribute(kHeader, "Ngroups_Total", static_cast<std::int64_t>(n));
+  f.write_attribute(kHeader, "Nids_Total", static_cast<std::int64_t>(ids.size()));
+  f.write_attribute(kHeader, "BoxSize", input.box);
+  f.write_attribute(kHeader, "Time", input.time);
+  f.write_attribute(kHeader, "Redshift", input.cosmological ? 1.0 / input.time - 1.0 : 0.0);
+  f.write_attribute(kHeader, "Omega0", input.omega_m);
+  f.write_attribute(kHeader, "OmegaLambda", input.omega_lambda);
+  f.write_attribute(kHeader, "HubbleParam", input.hubble_param);
+  f.write_attribute(kHeader, "Snapshot", info.snapshot);
+  f.write_attribute(kHeader, "NDens", static_cast<std::int64_t>(p.n_dens));
+  f.write_attribute(kHeader, "NHop", static_cast<std::int64_t>(p.n_hop));
+  f.write_attribute(kHeader, "NMerge", static_cast<std::int64_t>(p.n_merge));
+  f.write_attribute(kHeader, "DeltaOuter", p.delta_outer);
+  f.write_attribute(kHeader, "DeltaSaddle", p.delta_saddle);
+  f.write_attribute(kHeader, "DeltaPeak", p.delta_peak);
+  f.write_attribute(kHeader, "MeanBaryonDensity", info.mean_baryon_density);
+  f.write_attribute(kHeader, "MinimumMembers", static_cast<std::int64_t>(p.min_members));
+  f.write_attribute(kHeader, "Units",
+                    "the snapshot's: lengths comoving, masses in its mass unit, velocities peculiar; densities "
+                    "comoving, mass per comoving volume");
+  f.create_group("/Group");
+  f.write_dataset("/Group/GroupLen", len, {{"Description", "Members of each group (gas and stars)"}});
+  f.write_table("/Group/GroupLenType", len_type, 6, {{"Description", "Members of each group by particle type"}});
+  f.write_dataset("/Group/GroupOffset", offset, {{"Description", "Index of each group's first member in /IDs"}});
+  f.write_dataset("/Group/GroupMass", mass, {{"Description", "Baryonic mass: gas, its hidden stars, and stars"}});
+  f.write_table("/Group/GroupMassType", mass_type, 6,
+                {{"Description", "Mass by type: gas under 0, stars and the gas's hidden stellar mass under 4"}});
+  f.write_dataset("/Group/GroupCM", cm, {{"Description", "Centre of mass (periodic, folded into the box)"}});
+  f.write_dataset("/Group/GroupPeakPos", peak, {{"Description", "Position of the densest member"}});
+  f.write_dataset("/Group/GroupPeakDensity", peak_density, {{"Description", "HOP density of the densest member"}});
+  f.write_dataset("/Group/GroupVel", vel, {{"Description", "Mass-weighted mean peculiar velocity"}});
+  f.create_group("/IDs");
+  f.write_dataset("/IDs/ID", ids, {{"Description", "Member IDs, group by group"}});
+  f.write_dataset("/IDs/Type", member_type, {{"Description", "GADGET particle type of each member"}});
+  f.write_dataset("/IDs/Density", density, {{"Description", "HOP density of each member"}});
+}
+
 }  // namespace fountain::io

@@ -5,6 +5,7 @@
 
 #include "core/Units.hpp"
 #include "groups/FofCatalogue.hpp"
+#include "groups/Hop.hpp"
 
 namespace fountain::io {
 
@@ -42,5 +43,20 @@ struct FofCatalogueInfo {
 // the members, group by group, each group's by type then ID).
 void write_fof_catalogue(const std::string& path, const std::vector<groups::Group>& groups, const GroupInput& input,
                          const FofCatalogueInfo& info);
+
+// How a HOP catalogue was made.
+struct HopCatalogueInfo {
+  std::string snapshot;
+  groups::HopParameters parameters;
+  double mean_baryon_density = 0.0;  // the thresholds' unit (comoving)
+};
+
+// /Header (counts, the snapshot's time and cosmology, HOP's parameters and thresholds), /Group
+// (GroupLen, GroupLenType, GroupMass, GroupMassType with hidden stellar mass under type 4,
+// GroupCM, GroupPeakPos, GroupPeakDensity, GroupVel, GroupOffset) and /IDs (ID, Type and the
+// HOP Density of the members, group by group in increasing particle order). `members[k]` is
+// the ParticleSet index of HOP's particle k.
+void write_hop_catalogue(const std::string& path, const groups::HopResult& hop, const std::vector<std::uint32_t>& members,
+                         const std::vector<double>& hop_mass, const GroupInput& input, const HopCatalogueInfo& info);
 
 }  // namespace fountain::io

@@ -421,6 +421,64 @@ EOT
     "$bin" fof dm.hdf5 -o g.hdf5 -b 0.2 --linking-length 0.1 > bad.txt 2>&1; status=$?
     set -e
     [ "$status" -eq 2 ] && grep -q "give one" bad.txt || { cat bad.txt; fail "two linking lengths were not refused"; } ;;
+  hop_catalogue)
+    # `fountain hop` on a snapshot's baryons: two Plummer clumps of gas (with hidden stellar
+    # mass) and stars, 1 Mpc/h apart. Two groups at the paper's thresholds (80, 200 and 240
+    # mean baryon densities), their masses counting the hidden stars, the same on 1 and 2
+    # threads; a header without OmegaBaryon needs --omega-b.
+    "$python" - <<'EOT'
+import h5py, numpy as np
+rng = np.random.default_rng(6)
+def plummer(n, b, centre):
+    r = b / np.sqrt(rng.random(3 * n) ** (-2.0 / 3.0) - 1.0)
+    r = r[r < 20 * b][:n]
+    v = rng.normal(size=(n, 3))
+    return v / np.linalg.norm(v, axis=1)[:, None] * r[:, None] + centre
+gas = np.concatenate([plummer(3000, 0.05, 4.0), plummer(2000, 0.05, 5.0)])
+stars = np.concatenate([plummer(500, 0.03, 4.0), plummer(300, 0.03, 5.0)])
+for name, omega_b in (('baryons.hdf5', 0.03), ('no_omega_b.hdf5', None)):
+    with h5py.File(name, 'w') as f:
+        h = f.create_group('Header')
+        h.attrs['NumPart_ThisFile'] = np.array([len(gas), 0, 0, 0, len(stars), 0], dtype=np.uint64)
+        h.attrs['MassTable'] = np.array([1e6, 0, 0, 0, 2e6, 0])
+        h.attrs['BoxSize'] = 10.0
+        h.attrs['Time'] = 0.5
+        h.attrs['Omega0'] = 0.3
+        h.attrs['OmegaLambda'] = 0.7
+        h.attrs['HubbleParam'] = 0.6
+        if omega_b is not None:
+            h.attrs['OmegaBaryon'] = omega_b
+        for t, x in ((0, gas), (4, stars)):
+            g = f.create_group(f'PartType{t}')
+            g['Coordinates'] = x
+            g['Velocities'] = np.zeros_like(x)
+            g['ParticleIDs'] = np.arange(1, len(x) + 1, dtype=np.uint64) + (0 if t == 0 else 100000)
+        f['PartType0/HiddenStellarMasses'] = np.full(len(gas), 1e5)
+EOT
+    "$bin" hop baryons.hdf5 -o h1.hdf5 -t 1 > hop1.txt 2>&1 || { cat hop1.txt; fail "hop on 1 thread"; }
+    "$bin" hop baryons.hdf5 -o h2.hdf5 -t 2 > hop2.txt 2>&1 || { cat hop2.txt; fail "hop on 2 threads"; }
+    cat hop2.txt
+    "$python" - <<'EOT' || fail "the HOP catalogue is wrong"
+import h5py, numpy as np, sys
+a, b = h5py.File('h1.hdf5', 'r'), h5py.File('h2.hdf5', 'r')
+g = a['Group']
+n_type = g['GroupLenType'][:]
+m_type = g['GroupMassType'][:]
+ok = a['Header'].attrs['Ngroups_Total'] == 2 and n_type[0, 0] > n_type[1, 0] > 500 and n_type[1, 4] > 100
+# Gas 1e6 each plus 1e5 hidden, stars 2e6 each.
+ok = ok and np.allclose(g['GroupMass'][:], 1.1e6 * n_type[:, 0] + 2e6 * n_type[:, 4], rtol=1e-12)
+ok = ok and np.allclose(m_type[:, 4], 1e5 * n_type[:, 0] + 2e6 * n_type[:, 4], rtol=1e-12)
+peaks = g['GroupPeakPos'][:]
+ok = ok and np.abs(peaks[0] - 4.0).max() < 0.05 and np.abs(peaks[1] - 5.0).max() < 0.05
+for name in ['Group/GroupLen', 'Group/GroupMass', 'IDs/ID', 'IDs/Density']:
+    ok = ok and np.array_equal(a[name][:], b[name][:])
+sys.exit(0 if ok else 1)
+EOT
+    set +e
+    "$bin" hop no_omega_b.hdf5 -o h3.hdf5 > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "no_omega_b.hdf5.*give --omega-b" bad.txt || { cat bad.txt; fail "a missing Omega_b was not named"; }
+    "$bin" hop no_omega_b.hdf5 -o h3.hdf5 --omega-b 0.03 > ok.txt 2>&1 || { cat ok.txt; fail "--omega-b was not taken"; } ;;
   ic_cosmo_run)
     # Fountain's own cosmological box (2 x 8^3, 2LPT, z = 49) runs comovingly with the
     # cosmology it was made for, and refuses another; bad options are named.

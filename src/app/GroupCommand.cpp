@@ -12,6 +12,7 @@
 #include "core/Error.hpp"
 #include "cosmology/Background.hpp"
 #include "groups/FofCatalogue.hpp"
+#include "groups/Hop.hpp"
 #include "io/GroupFiles.hpp"
 
 namespace fountain {
@@ -24,14 +25,64 @@ double hubble0_in(const Units& u) {
   return cosmology::kHubbleInternal * (u.length_cgs / mpc_msun_kms.length_cgs) / (u.velocity_cgs / mpc_msun_kms.velocity_cgs);
 }
 
+std::unique_ptr<tbb::global_control> limit_threads(int threads) {
+  if (threads <= 0) return nullptr;
+  return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                               static_cast<std::size_t>(threads));
+}
+
+double critical_density(const Units& u) {
+  const double h0 = hubble0_in(u);
+  return 3.0 * h0 * h0 / (8.0 * std::numbers::pi * u.gravitational_constant());
+}
+
 }  // namespace
+
+std::string find_hop_groups(const HopRequest& request) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto threads = limit_threads(request.threads);
+  const io::GroupInput in = io::read_group_input(request.snapshot);
+  const groups::ParticleSet& set = in.particles;
+  // Baryons only: gas with its hidden stellar mass, and stars.
+  std::vector<std::uint32_t> members;
+  std::vector<Vec3> x;
+  std::vector<double> mass;
+  for (std::size_t i = 0; i < set.size(); ++i)
+    if (set.type[i] == 0 || set.type[i] == 4) {
+      members.push_back(static_cast<std::uint32_t>(i));
+      x.push_back(set.x[i]);
+      mass.push_back(set.mass[i] + in.hidden_mass[i]);
+    }
+  if (members.empty()) throw InputError(fmt::format("{}: no gas or star particles for HOP", request.snapshot));
+  const double omega_b = request.omega_b >= 0.0 ? request.omega_b : in.omega_b;
+  if (!in.cosmological || !(omega_b > 0.0))
+    throw InputError(fmt::format("{}: HOP's thresholds are in mean baryon densities, Omega_b rho_crit0: the snapshot "
+                                 "{}; give --omega-b",
+                                 request.snapshot, in.cosmological ? "has no OmegaBaryon" : "is not cosmological"));
+  groups::HopParameters p;
+  const double mean = omega_b * critical_density(in.units);
+  p.n_dens = request.n_dens;
+  p.n_hop = request.n_hop;
+  p.n_merge = request.n_merge;
+  p.delta_outer = request.outer * mean;
+  p.delta_saddle = request.saddle_factor * p.delta_outer;
+  p.delta_peak = request.peak_factor * p.delta_outer;
+  p.box = in.box;
+  const groups::HopResult hop = groups::find_hop_groups(x, mass, p);
+  io::write_hop_catalogue(request.output, hop, members, mass, in, {request.snapshot, p, mean});
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const std::string largest = hop.groups.empty()
+                                  ? std::string("none")
+                                  : fmt::format("the largest {:.4g} with {} members", hop.groups[0].mass,
+                                                hop.groups[0].members.size());
+  return fmt::format("wrote {} ({} HOP groups among {} baryonic particles, delta_outer = {:g} mean baryon densities; "
+                     "{}) in {:.2f} s",
+                     request.output, hop.groups.size(), members.size(), request.outer, largest, seconds);
+}
 
 std::string find_groups(const FofRequest& request) {
   const auto start = std::chrono::steady_clock::now();
-  std::unique_ptr<tbb::global_control> threads;
-  if (request.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    static_cast<std::size_t>(request.threads));
+  const auto threads = limit_threads(request.threads);
   const io::GroupInput in = io::read_group_input(request.snapshot);
   const groups::ParticleSet& set = in.particles;
   for (int t : request.linking_types)
@@ -40,8 +91,7 @@ std::string find_groups(const FofRequest& request) {
   // The mean density the primaries stand for: all matter but the baryons (COSMOLOGY.md C9.1),
   // or all matter when the snapshot has no gas or stars.
   const double G = in.units.gravitational_constant();
-  const double hubble0 = hubble0_in(in.units);
-  const double rho_crit0 = 3.0 * hubble0 * hubble0 / (8.0 * std::numbers::pi * G);
+  const double rho_crit0 = critical_density(in.units);
   double primary_mass = 0.0, gas_mass = 0.0, dm_mass = 0.0;
   std::size_t primaries = 0, baryons = 0, gas = 0, dm = 0;
   for (std::size_t i = 0; i < set.size(); ++i) {

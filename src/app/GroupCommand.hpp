@@ -1,4 +1,4 @@
-// `fountain fof`: friends-of-friends groups of a snapshot, written as a catalogue.
+// `fountain fof` and `fountain hop`: a snapshot's groups, written as catalogues.
 #pragma once
 #include <string>
 #include <vector>
@@ -17,5 +17,20 @@ struct FofRequest {
 
 // Finds the groups and writes the catalogue; returns the summary line.
 std::string find_groups(const FofRequest& request);
+
+struct HopRequest {
+  std::string snapshot;
+  std::string output;
+  double outer = 80.0;          // delta_outer in mean baryon densities (the paper's)
+  double saddle_factor = 2.5;   // delta_saddle / delta_outer
+  double peak_factor = 3.0;     // delta_peak / delta_outer
+  int n_dens = 64, n_hop = 16, n_merge = 4;
+  double omega_b = -1.0;        // >= 0: instead of the snapshot's OmegaBaryon
+  int threads = 0;
+};
+
+// HOP on the snapshot's baryons (gas with its hidden stars, and stars); writes the catalogue
+// and returns the summary line.
+std::string find_hop_groups(const HopRequest& request);
 
 }  // namespace fountain

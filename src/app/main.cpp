@@ -16,7 +16,7 @@
 
 namespace {
 
-constexpr const char* kCommands[] = {"run", "ic", "fof", "params"};
+constexpr const char* kCommands[] = {"run", "ic", "fof", "hop", "params"};
 
 // CLI11 answers an unknown first word with "A subcommand is required": name it instead.
 bool is_unknown_command(int argc, char** argv) {
@@ -111,10 +111,29 @@ int main(int argc, char** argv) {
   fof->add_option("--min-members", fof_request.min_members, "Linking particles a group needs")->capture_default_str();
   fof->add_option("-t,--threads", fof_request.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
 
+  auto* hop = app.add_subcommand("hop", "HOP groups of a snapshot's baryons, written as an HDF5 catalogue");
+  HopRequest hop_request;
+  hop->add_option("snapshot", hop_request.snapshot, "Snapshot (GADGET-layout HDF5)")->required();
+  hop->add_option("-o,--output", hop_request.output, "Catalogue to write (HDF5)")->required();
+  hop->add_option("--outer", hop_request.outer, "delta_outer in mean baryon densities")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  hop->add_option("--saddle-factor", hop_request.saddle_factor, "delta_saddle / delta_outer")
+      ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
+  hop->add_option("--peak-factor", hop_request.peak_factor, "delta_peak / delta_outer (at least the saddle factor)")
+      ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
+  hop->add_option("--n-dens", hop_request.n_dens, "Neighbours of the density estimate")->check(CLI::Range(2, 4096))->capture_default_str();
+  hop->add_option("--n-hop", hop_request.n_hop, "Neighbours hopped among")->check(CLI::Range(2, 4096))->capture_default_str();
+  hop->add_option("--n-merge", hop_request.n_merge, "Neighbours defining boundaries")->check(CLI::Range(1, 4096))->capture_default_str();
+  hop->add_option("--omega-b", hop_request.omega_b, "Omega_b, if the snapshot's header lacks OmegaBaryon")->check(CLI::Range(0.0, 1.0));
+  hop->add_option("-t,--threads", hop_request.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
+
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
   if (is_unknown_command(argc, argv)) {
-    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, fof, params (fountain --help explains them)\n",
+    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, fof, hop, params (fountain --help explains them)\n",
                argv[1]);
     return 2;
   }
@@ -203,6 +222,12 @@ int main(int argc, char** argv) {
       if (fof_length->count() > 0 && fof->get_option("-b")->count() > 0)
         throw InputError("options -b and --linking-length both set the linking length: give one");
       fmt::print(stderr, "{}\n", find_groups(fof_request));
+    } else if (*hop) {
+      if (hop_request.peak_factor < hop_request.saddle_factor)
+        throw InputError(fmt::format("option --peak-factor = {} is below --saddle-factor = {}: delta_peak must be at "
+                                     "least delta_saddle",
+                                     hop_request.peak_factor, hop_request.saddle_factor));
+      fmt::print(stderr, "{}\n", find_hop_groups(hop_request));
     } else if (*params_cmd) {
       fmt::print("{}", parameter_reference_markdown());
     }
