@@ -3,8 +3,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
 #include <atomic>
 #include <memory>
+#include <utility>
 
 namespace fountain::groups {
 
@@ -86,23 +89,35 @@ std::vector<std::int64_t> nearest_within(const PointGrid& grid, std::span<const 
   std::vector<std::int64_t> nearest(queries.size(), -1);
   const auto& cells = grid.cells();
   const auto& order = grid.order();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t k = r.begin(); k != r.end(); ++k) {
-      double best = radius * radius;
-      std::int64_t found = -1;
-      grid.for_each_cell_near(grid.cell_of(queries[k]), 1, [&](std::size_t c) {
-        const PointGrid::Cell& cell = cells[c];
-        for (std::uint32_t p = cell.first; p < cell.first + cell.count; ++p) {
-          const std::uint32_t j = order[p];
-          const Vec3 d = grid.separation(queries[k], points[j]);
-          const double r2 = dot(d, d);
-          if (r2 < best || (r2 == best && found >= 0 && j < found)) {
-            best = r2;
-            found = j;
+  // Queries sorted by their cell, so that each cell's neighbourhood is looked up once.
+  std::vector<std::pair<std::array<int, 3>, std::uint32_t>> by_cell(queries.size());
+  for (std::size_t k = 0; k < queries.size(); ++k) by_cell[k] = {grid.cell_of(queries[k]), static_cast<std::uint32_t>(k)};
+  std::sort(by_cell.begin(), by_cell.end());
+  std::vector<std::size_t> runs;  // starts of runs of one cell
+  for (std::size_t k = 0; k < by_cell.size(); ++k)
+    if (k == 0 || by_cell[k].first != by_cell[k - 1].first) runs.push_back(k);
+  runs.push_back(by_cell.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runs.size() - 1, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<std::size_t> near;
+    for (std::size_t run = r.begin(); run != r.end(); ++run) {
+      near.clear();
+      grid.for_each_cell_near(by_cell[runs[run]].first, 1, [&](std::size_t c) { near.push_back(c); });
+      for (std::size_t q = runs[run]; q < runs[run + 1]; ++q) {
+        const std::uint32_t k = by_cell[q].second;
+        double best = radius * radius;
+        std::int64_t found = -1;
+        for (std::size_t c : near)
+          for (std::uint32_t p = cells[c].first; p < cells[c].first + cells[c].count; ++p) {
+            const std::uint32_t j = order[p];
+            const Vec3 d = grid.separation(queries[k], points[j]);
+            const double r2 = dot(d, d);
+            if (r2 < best || (r2 == best && found >= 0 && j < found)) {
+              best = r2;
+              found = j;
+            }
           }
-        }
-      });
-      nearest[k] = found;
+        nearest[k] = found;
+      }
     }
   });
   return nearest;

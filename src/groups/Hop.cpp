@@ -40,9 +40,14 @@ NeighbourTable neighbour_table(const NearestNeighbours& tree, std::span<const Ve
   t.k = std::min(k, x.size());
   t.index.resize(x.size() * t.k);
   t.h.resize(x.size());
+  // In the tree's order: neighbouring queries share the nodes they visit.
+  const std::vector<std::uint32_t>& order = tree.order();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, x.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) {
-      const auto found = tree.nearest(x[i], t.k);
+    std::vector<NearestNeighbours::Neighbour> found;
+    NearestNeighbours::SearchStack stack;
+    for (std::size_t p = r.begin(); p != r.end(); ++p) {
+      const std::size_t i = order[p];
+      tree.nearest(x[i], t.k, found, stack);
       for (std::size_t n = 0; n < t.k; ++n) t.index[i * t.k + n] = found[n].index;
       t.h[i] = 0.5 * std::sqrt(found.back().distance2);
     }

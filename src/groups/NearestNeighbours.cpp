@@ -50,21 +50,27 @@ double NearestNeighbours::box_distance2(const Node& n, const Vec3& x) const {
   double d2 = 0.0;
   for (int k = 0; k < 3; ++k) {
     double d = std::max({0.0, n.lo[k] - x[k], x[k] - n.hi[k]});
-    if (box_ > 0.0) {
-      // The images of x one box to either side (the node's box lies inside [0, L)).
-      d = std::min({d, std::max({0.0, n.lo[k] - (x[k] + box_), (x[k] + box_) - n.hi[k]}),
-                    std::max({0.0, n.lo[k] - (x[k] - box_), (x[k] - box_) - n.hi[k]})});
-    }
+    // Periodic: x's images one box to either side. Both x and the node's box lie in [0, L),
+    // so those distances are simply x + L - hi and lo - x + L.
+    if (box_ > 0.0) d = std::min({d, x[k] + box_ - n.hi[k], n.lo[k] - x[k] + box_});
     d2 += d * d;
   }
   return d2;
 }
 
 std::vector<NearestNeighbours::Neighbour> NearestNeighbours::nearest(const Vec3& x, std::size_t k) const {
-  std::vector<Neighbour> heap;  // max-heap on (distance2, index): its front is the worst kept
-  if (nodes_.empty() || k == 0) return heap;
-  heap.reserve(k);
-  std::vector<std::pair<std::int32_t, double>> stack{{0, box_distance2(nodes_[0], x)}};
+  std::vector<Neighbour> found;
+  SearchStack stack;
+  nearest(x, k, found, stack);
+  return found;
+}
+
+void NearestNeighbours::nearest(const Vec3& x, std::size_t k, std::vector<Neighbour>& heap, SearchStack& stack) const {
+  // `heap` is a max-heap on (distance2, index) while searching: its front is the worst kept.
+  heap.clear();
+  stack.clear();
+  if (nodes_.empty() || k == 0) return;
+  stack.emplace_back(0, box_distance2(nodes_[0], x));
   while (!stack.empty()) {
     const auto [at, d2] = stack.back();
     stack.pop_back();
@@ -99,7 +105,6 @@ std::vector<NearestNeighbours::Neighbour> NearestNeighbours::nearest(const Vec3&
     }
   }
   std::sort_heap(heap.begin(), heap.end());
-  return heap;
 }
 
 }  // namespace fountain::groups

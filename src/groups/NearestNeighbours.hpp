@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -14,7 +15,8 @@ namespace fountain::groups {
 // built: any number of threads may search it at once.
 class NearestNeighbours {
  public:
-  // box > 0: periodic box [0, box)^3 (points must lie in it); box = 0: open.
+  // box > 0: periodic box [0, box)^3 (points must lie in it); box = 0: open. The points are
+  // read, not copied: they must outlive the tree.
   NearestNeighbours(std::span<const Vec3> points, double box);
 
   struct Neighbour {
@@ -25,6 +27,13 @@ class NearestNeighbours {
   // The k nearest points to x (fewer if the set is smaller), nearest first, ties by index:
   // the answer is the same whatever the tree's shape. A point of the set finds itself first.
   std::vector<Neighbour> nearest(const Vec3& x, std::size_t k) const;
+  // The same into `found`, with `stack` for the search: buffers a caller reuses across queries.
+  using SearchStack = std::vector<std::pair<std::int32_t, double>>;
+  void nearest(const Vec3& x, std::size_t k, std::vector<Neighbour>& found, SearchStack& stack) const;
+
+  // The points in the tree's order (its leaves one after another): queries made in this
+  // order find their neighbours in cache.
+  const std::vector<std::uint32_t>& order() const { return order_; }
 
   // b - a at the nearest image.
   Vec3 separation(const Vec3& a, const Vec3& b) const {

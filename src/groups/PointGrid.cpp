@@ -67,11 +67,12 @@ PointGrid::PointGrid(std::span<const Vec3> points, double cell_size, double box)
   }
   const std::size_t capacity = std::bit_ceil(std::max<std::size_t>(16, 2 * cells_.size()));
   mask_ = capacity - 1;
-  table_.assign(capacity, -1);
+  table_.assign(capacity, {0, -1});
   for (std::size_t c = 0; c < cells_.size(); ++c) {
-    std::uint64_t slot = mix(key(cells_[c].at)) & mask_;
-    while (table_[slot] >= 0) slot = (slot + 1) & mask_;
-    table_[slot] = static_cast<std::int64_t>(c);
+    const std::uint64_t k = key(cells_[c].at);
+    std::uint64_t slot = mix(k) & mask_;
+    while (table_[slot].second >= 0) slot = (slot + 1) & mask_;
+    table_[slot] = {k, static_cast<std::int64_t>(c)};
   }
 }
 
@@ -108,9 +109,9 @@ std::int64_t PointGrid::find(std::array<int, 3> at) const {
   }
   const std::uint64_t wanted = key(at);
   for (std::uint64_t slot = mix(wanted) & mask_;; slot = (slot + 1) & mask_) {
-    const std::int64_t c = table_[slot];
+    const auto& [k, c] = table_[slot];
     if (c < 0) return -1;
-    if (key(cells_[static_cast<std::size_t>(c)].at) == wanted) return c;
+    if (k == wanted) return c;
   }
 }
 

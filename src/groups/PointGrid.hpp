@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -78,7 +79,9 @@ class PointGrid {
   bool small_ = false;  // periodic with fewer than 5 cells on a side: lookups may repeat
   std::vector<Cell> cells_;
   std::vector<std::uint32_t> order_;
-  std::vector<std::int64_t> table_;  // open addressing: cell index or -1
+  // Open addressing: (key, cell index), index -1 for an empty slot. The key is kept in the
+  // slot so that a lookup reads no cell.
+  std::vector<std::pair<std::uint64_t, std::int64_t>> table_;
   std::uint64_t mask_ = 0;
 };
 
