@@ -1,8 +1,10 @@
 // Initial conditions of a periodic cosmological box: dark matter (and gas) on a lattice displaced by Zel'dovich or 2LPT from a Gaussian field.
 #pragma once
 #include <cstdint>
+#include <vector>
 
 #include "core/Units.hpp"
+#include "core/Vec3.hpp"
 #include "cosmology/Background.hpp"
 #include "cosmology/TransferFunction.hpp"
 #include "ics/LagrangianPerturbation.hpp"
@@ -41,5 +43,18 @@ CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Unit
 // The linear density contrast at z = 0 (D = 1) the box is made from, as Fourier coefficients:
 // each cell's white noise, transformed, times sqrt(P(k) / (L/N)^3).
 SpectralField linear_density(const CosmologicalBoxParams& p);
+// The same from a given white-noise grid of p.level (a zoom's nested noise).
+SpectralField linear_density_of(const std::vector<double>& noise, const CosmologicalBoxParams& p);
+
+// The particle of every cell of p.level's grid at a_start: its Lagrangian position (the cell's
+// centre, moved by `shift` cells along each axis) plus its displacement, not folded into the
+// box, and its velocity v' = a^2 H (f D psi1 + f2 D2 grad phi2).
+struct LatticeParticles {
+  std::vector<Vec3> x, v;
+};
+LatticeParticles lagrangian_particles(const SpectralField& delta, const CosmologicalBoxParams& p, double shift);
+
+// Omega_m rho_crit0 (L/N)^3: the matter of one cell of p.level's grid.
+double cell_matter(const CosmologicalBoxParams& p, int level, const Units& units);
 
 }  // namespace fountain::ics

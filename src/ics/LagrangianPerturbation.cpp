@@ -96,6 +96,13 @@ SpectralField forward_transform(const std::vector<double>& grid, int n, double b
   return f;
 }
 
+std::vector<double> real_field(const SpectralField& f, const std::function<double(double)>& filter) {
+  Transforms t(f.n);
+  return t.backward(derived(f, 0.0, [&](const std::array<double, 3>& k, Complex v) {
+    return v * filter(std::sqrt(k[0] * k[0] + k[1] * k[1] + k[2] * k[2]));
+  }));
+}
+
 Displacements lagrangian_displacements(const SpectralField& delta, int order, double shift) {
   Transforms t(delta.n);
   Displacements d;

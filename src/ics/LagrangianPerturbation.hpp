@@ -2,6 +2,7 @@
 #pragma once
 #include <array>
 #include <complex>
+#include <functional>
 #include <vector>
 
 namespace fountain::ics {
@@ -25,6 +26,10 @@ struct SpectralField {
 
 // The coefficients of a real N^3 grid (cell (i, j, k) at (i N + j) N + k).
 SpectralField forward_transform(const std::vector<double>& grid, int n, double box);
+
+// The real field of `f` on its N^3 cells, each mode times filter(|k|) (k = 0 and the Nyquist
+// modes dropped): a smoothed density, say.
+std::vector<double> real_field(const SpectralField& f, const std::function<double(double)>& filter);
 
 // Real displacement fields (one N^3 grid per component) at the cell positions shifted by
 // `shift` cells along each axis (0: the cells; 0.5: the cells' far corners, where the gas sits).
