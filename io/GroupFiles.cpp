@@ -157,6 +157,19 @@ void write_fof_catalogue(const std::string& path, const std::vector<groups::Grou
   f.write_dataset("/IDs/Type", member_type, {{"Description", "GADGET particle type of each member"}});
 }
 
+FofHalos read_fof_halos(const std::string& path) {
+  const hdf5::File f(path, hdf5::File::Mode::read);
+  FofHalos h;
+  h.box = header_scalar(f, "BoxSize", 0.0, true);
+  h.time = header_scalar(f, "Time", 0.0, true);
+  h.centre = f.read_vec3("/Group/GroupPos");
+  h.m200 = f.read_doubles("/Group/Group_M_Crit200");
+  h.r200 = f.read_doubles("/Group/Group_R_Crit200");
+  if (h.m200.size() != h.centre.size() || h.r200.size() != h.centre.size())
+    f.fail("/Group", "GroupPos, Group_M_Crit200 and Group_R_Crit200 differ in length");
+  return h;
+}
+
 void write_hop_catalogue(const std::string& path, const groups::HopResult& hop, const std::vector<std::uint32_t>& members,
                          const std::vector<double>& hop_mass, const GroupInput& input, const HopCatalogueInfo& info) {
   hdf5::File f(path, hdf5::File::Mode::create);

@@ -44,6 +44,15 @@ struct FofCatalogueInfo {
 void write_fof_catalogue(const std::string& path, const std::vector<groups::Group>& groups, const GroupInput& input,
                          const FofCatalogueInfo& info);
 
+// What a zoom needs of a friends-of-friends catalogue: each group's centre and M_200, R_200.
+struct FofHalos {
+  std::vector<Vec3> centre;  // GroupPos
+  std::vector<double> m200, r200;
+  double box = 0.0, time = 0.0;
+};
+// Reads them; a missing or malformed file or dataset throws InputError naming it.
+FofHalos read_fof_halos(const std::string& path);
+
 // How a HOP catalogue was made.
 struct HopCatalogueInfo {
   std::string snapshot;

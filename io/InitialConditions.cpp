@@ -497,16 +497,21 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const Colli
       for (auto& v : values) v = v * s;
     return values;
   };
+  // A zoom's low-resolution dark matter goes to /PartType2, the rest to /PartType1.
+  std::size_t n_low = 0;
+  if (dm != nullptr)
+    for (fountain::Species s : dm->species) n_low += s == fountain::Species::LowResDarkMatter;
+  const std::size_t n_high = n_dm - n_low;
   hdf5::write_file_atomically(path, "initial conditions", [&](File& file) {
     if (cosmological != nullptr) {
-      hdf5::write_gadget_header(file, {n, n_dm, 0, 0, 0, 0}, {box_size.x}, a, &cosmological->cosmology);
+      hdf5::write_gadget_header(file, {n, n_high, n_low, 0, 0, 0}, {box_size.x}, a, &cosmological->cosmology);
       const Units& u = cosmological->units;
       file.create_group("/Units");
       file.write_attribute("/Units", "UnitLength_in_cm", u.length_cgs);
       file.write_attribute("/Units", "UnitMass_in_g", u.mass_cgs);
       file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", u.velocity_cgs);
     } else {
-      hdf5::write_gadget_header(file, {n, n_dm, 0, 0, 0, 0}, {box_size.x, box_size.y, box_size.z}, time);
+      hdf5::write_gadget_header(file, {n, n_high, n_low, 0, 0, 0}, {box_size.x, box_size.y, box_size.z}, time);
     }
     // Not a GADGET field; records the boundary conditions the set-up was made for.
     file.write_attribute(kHeader, "Periodic", periodic ? 1 : 0);
@@ -523,16 +528,28 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const Colli
     }
     if (dm == nullptr) return;
 
-    // Each type's common mass in the table (the header as written above has zeros).
-    table[1] = common_mass(dm->mass);
+    for (const bool low : {false, true}) {
+      if ((low ? n_low : n_high) == 0) continue;
+      std::vector<Vec3> x, v;
+      std::vector<std::uint64_t> id;
+      std::vector<double> mass;
+      for (std::size_t i = 0; i < n_dm; ++i) {
+        if ((dm->species[i] == fountain::Species::LowResDarkMatter) != low) continue;
+        x.push_back(dm->x[i]);
+        v.push_back(dm->v_full[i] * v_scale);
+        id.push_back(dm->id[i]);
+        mass.push_back(dm->mass[i]);
+      }
+      // Each type's common mass in the table (the header as written above has zeros).
+      const Species& sp = low ? kType2 : kDarkMatterSpecies;
+      table[static_cast<std::size_t>(sp.type)] = common_mass(mass);
+      file.create_group(sp.group);
+      file.write_dataset(sp.dataset("Coordinates"), x);
+      file.write_dataset(sp.dataset("Velocities"), v);
+      file.write_dataset(sp.dataset("ParticleIDs"), id);
+      file.write_dataset(sp.dataset("Masses"), mass);
+    }
     file.write_attribute(kHeader, "MassTable", table);
-
-    const Species& sp = kDarkMatterSpecies;
-    file.create_group(sp.group);
-    file.write_dataset(sp.dataset("Coordinates"), dm->x);
-    file.write_dataset(sp.dataset("Velocities"), scaled(dm->v_full, v_scale));
-    file.write_dataset(sp.dataset("ParticleIDs"), dm->id);
-    file.write_dataset(sp.dataset("Masses"), dm->mass);
   });
 }
 

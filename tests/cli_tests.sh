@@ -479,6 +479,61 @@ EOT
     set -e
     [ "$status" -eq 2 ] && grep -q "no_omega_b.hdf5.*give --omega-b" bad.txt || { cat bad.txt; fail "a missing Omega_b was not named"; }
     "$bin" hop no_omega_b.hdf5 -o h3.hdf5 --omega-b 0.03 > ok.txt 2>&1 || { cat ok.txt; fail "--omega-b was not taken"; } ;;
+  ic_zoom)
+    # The zoom pipeline at toy size (levels 3, 4, 5 in 20 Mpc/h): the parent run's initial
+    # conditions, the parent run to z = 0, its halos, and zoom initial conditions on one of
+    # them: gas and dark matter of level 5 in the traced region, level-4 and level-3 dark matter
+    # (GADGET type 2) elsewhere, the box's whole matter content; they run. Bad options are named.
+    cosmology="--box 20 --omega-b 0.03 --hubble 0.6 --seed 2"
+    # shellcheck disable=SC2086
+    "$bin" ic zoom --levels 3 4 5 $cosmology -o parent.hdf5 > ic.txt 2>&1 || { cat ic.txt; fail "parent ICs"; }
+    grep -q "16^3 dark matter particles of 1.626e+11 Msun/h" ic.txt || { cat ic.txt; fail "parent ICs' summary"; }
+    cat > parent.yml <<EOT
+initial_conditions: {file: parent.hdf5, periodic: true}
+cosmology: {enabled: true, omega_b: 0.03, hubble_param: 0.6, a_end: 1}
+gravity: {enabled: true, softening_dark_matter: 0.044, mesh_cells: 32}
+time_integration: {dt_max: 1}
+output: {directory: parent_run}
+EOT
+    "$bin" run parent.yml -q > run.txt 2>&1 || { cat run.txt; fail "parent run"; }
+    "$bin" fof parent_run/snapshot_0001.hdf5 -o fof.hdf5 --min-members 20 > fof.txt 2>&1 || { cat fof.txt; fail "fof"; }
+    # shellcheck disable=SC2086
+    "$bin" ic zoom --levels 3 4 5 $cosmology --parent parent_run/snapshot_0001.hdf5 --groups fof.hdf5 --halo 0 \
+      --target 1000 -o zoom.hdf5 > zoom.txt 2>&1 || { cat zoom.txt; fail "zoom ICs"; }
+    cat zoom.txt
+    "$python" - <<'EOT' || fail "the zoom ICs are wrong"
+import h5py, numpy as np, sys
+f = h5py.File('zoom.hdf5', 'r')
+n = f['Header'].attrs['NumPart_ThisFile']
+m = sum(f[f'PartType{t}/Masses'][:].sum() for t in (0, 1, 2))
+rho_crit = 3 * 100.0**2 / (8 * np.pi * 4.300917270069976e-09)
+fine = f['PartType1/Masses'][:]
+coarse = np.unique(f['PartType2/Masses'][:])
+ok = n[0] == n[1] and n[0] >= 1000 and n[0] % 8 == 0 and n[2] > 0
+ok = ok and abs(m / (0.3 * rho_crit * 20.0**3) - 1) < 1e-5
+# Two coarse masses: a level-4 block is 8 level-5 cells, a level-3 block 64.
+cell = fine[0] + f['PartType0/Masses'][0]
+ok = ok and len(coarse) == 2 and np.allclose(coarse / cell, [8, 64], rtol=1e-12)
+sys.exit(0 if ok else 1)
+EOT
+    sed 's/parent.hdf5/zoom.hdf5/; s/parent_run/zoom_run/; s/a_end: 1/a_end: 0.03/' parent.yml > zoom.yml
+    printf 'hydro: {h_max: 2.0}
+' >> zoom.yml
+    "$bin" run zoom.yml -q > zrun.txt 2>&1 || { cat zrun.txt; fail "zoom run"; }
+    # shellcheck disable=SC2086
+    expect_status_message() {  # expect_status_message MESSAGE COMMAND...
+      message=$1; shift
+      set +e
+      "$@" > bad.txt 2>&1; status=$?
+      set -e
+      [ "$status" -eq 2 ] && grep -q -- "$message" bad.txt || { cat bad.txt; fail "not refused: $*"; }
+    }
+    expect_status_message "coarsest = parent or parent - 1" "$bin" ic zoom --levels 2 4 5 -o bad.hdf5
+    expect_status_message "go together" "$bin" ic zoom --levels 3 4 5 --parent parent_run/snapshot_0001.hdf5 -o bad.hdf5
+    expect_status_message "does not apply to zoom" "$bin" ic zoom -n 16 -o bad.hdf5
+    expect_status_message "applies to zoom only" "$bin" ic cosmo --levels 3 4 5 -o bad.hdf5
+    expect_status_message "has 2 groups\|has [0-9]* groups" "$bin" ic zoom --levels 3 4 5 --box 20 --omega-b 0.03 \
+      --hubble 0.6 --parent parent_run/snapshot_0001.hdf5 --groups fof.hdf5 --halo 999 -o bad.hdf5 ;;
   ic_cosmo_run)
     # Fountain's own cosmological box (2 x 8^3, 2LPT, z = 49) runs comovingly with the
     # cosmology it was made for, and refuses another; bad options are named.
@@ -513,7 +568,7 @@ EOT
     set +e
     "$bin" ic sod --box 3 -o bad.hdf5 > bad.txt 2>&1; status=$?
     set -e
-    [ "$status" -eq 2 ] && grep -q "applies to cosmo only" bad.txt || { cat bad.txt; fail "--box for sod was not refused"; } ;;
+    [ "$status" -eq 2 ] && grep -q "applies to cosmo and zoom only" bad.txt || { cat bad.txt; fail "--box for sod was not refused"; } ;;
   snapshot_opens_in_yt)
     params good.hdf5 out
     "$bin" run params.yml -q > out.txt 2>&1 || { cat out.txt; fail "run failed"; }

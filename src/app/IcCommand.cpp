@@ -46,6 +46,7 @@ double ic_particle_count(const IcRequest& r) {
   if (r.problem == "gresho") return 2.0 * n * n * (n / 2);
   if (r.problem == "evrard") return (4.0 / 3.0) * M_PI * n * n * n;  // the cube of side 2n cut to the ball
   if (r.problem == "cosmo") return (r.cosmo.gas ? 2.0 : 1.0) * n * n * n;
+  if (r.problem == "zoom") return 2.0 * std::pow(8.0, r.zoom.levels.finest);  // the finest level's fields, a cell each
   return 2.0 * n;                                                    // sphere: gas + dark matter
 }
 
@@ -81,7 +82,15 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
     throw InputError(fmt::format("option -n,--resolution = {}: a cosmological box needs a power of two particles per "
                                  "side, from 2 to 4096",
                                  resolution_of(r)));
-  if (r.problem == "cosmo") {
+  if (r.problem == "zoom") {
+    const ics::ZoomLevels& z = r.zoom.levels;
+    if (!((z.coarsest == z.parent || z.coarsest == z.parent - 1) && z.parent <= z.finest && z.coarsest >= 1 && z.finest <= 10))
+      throw InputError(fmt::format("option --levels = {},{},{}: coarsest, parent and finest levels need coarsest = parent "
+                                   "or parent - 1, parent <= finest <= 10",
+                                   z.coarsest, z.parent, z.finest));
+    if (r.resolution_given) throw InputError("option -n,--resolution does not apply to zoom: --levels sets its grids");
+  }
+  if (r.problem == "cosmo" || r.problem == "zoom") {
     const ics::CosmologicalBoxParams& c = r.cosmo;
     if (!(c.box > 0.0 && std::isfinite(c.box))) throw InputError(fmt::format("option --box = {} must be positive", c.box));
     if (!(c.a_start > 0.0 && c.a_start < 1.0))
@@ -110,6 +119,7 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
 
 std::string write_ic(const IcRequest& r) {
   check_ic_request(r, available_memory_bytes());
+  if (r.problem == "zoom") return write_zoom_ic(r);
   const int n = resolution_of(r);
   if (r.problem == "cosmo") {
     ics::CosmologicalBoxParams c = r.cosmo;

@@ -5,17 +5,28 @@
 
 #include "ics/CosmologicalBox.hpp"
 #include "ics/RotatingSphere.hpp"
+#include "ics/ZoomInitialConditions.hpp"
 
 namespace fountain {
 
 struct IcRequest {
-  std::string problem;      // sod | sedov | gresho | evrard | sphere | cosmo
+  std::string problem;      // sod | sedov | gresho | evrard | sphere | cosmo | zoom
   std::string output;       // HDF5 file to write
   int resolution = 0;       // 0: the problem's default
   bool resolution_given = false;
   double gamma = 5.0 / 3.0;
   ics::RotatingSphereParams sphere;
   ics::CosmologicalBoxParams cosmo;  // its level is set from the resolution
+  // zoom: the levels; without a parent run, the parent run's initial conditions.
+  struct Zoom {
+    ics::ZoomLevels levels;
+    std::string parent;               // the parent run's snapshot at z = 0
+    std::string groups;               // its friends-of-friends catalogue
+    long long halo = -1;              // >= 0: this group; else chosen by mass and isolation
+    double mass_min = 6e11, mass_max = 1.5e12;  // M_200 range of candidates (Msun/h)
+    double isolation = 2.0;           // no group of half the mass within this (Mpc/h, comoving)
+    double target = 6300;             // high-resolution particles per species wanted
+  } zoom;
 };
 
 // The particle count a request makes (estimated from the lattice, before anything is built).
@@ -36,5 +47,9 @@ void check_ic_request(const IcRequest& r, double memory_bytes);
 // Checks the request against this machine's memory, builds the particles and writes them;
 // returns the line to print.
 std::string write_ic(const IcRequest& r);
+
+// `fountain ic zoom` (ZoomCommand.cpp): the parent run's initial conditions, or with a parent
+// run and its groups, a zoom on one of its halos (COSMOLOGY.md C8).
+std::string write_zoom_ic(const IcRequest& r);
 
 }  // namespace fountain

@@ -52,9 +52,9 @@ int main(int argc, char** argv) {
 
   auto* ic = app.add_subcommand("ic", "Write the initial conditions of a validation problem");
   IcRequest request;
-  ic->add_option("problem", request.problem, "sod | sedov | gresho | evrard | sphere | cosmo")
+  ic->add_option("problem", request.problem, "sod | sedov | gresho | evrard | sphere | cosmo | zoom")
       ->required()
-      ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere", "cosmo"}));
+      ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere", "cosmo", "zoom"}));
   ic->add_option("-o,--output", request.output, "Output HDF5 file")->required();
   auto* resolution_opt =
       ic->add_option("-n,--resolution", request.resolution,
@@ -130,6 +130,22 @@ int main(int argc, char** argv) {
   hop->add_option("--omega-b", hop_request.omega_b, "Omega_b, if the snapshot's header lacks OmegaBaryon")->check(CLI::Range(0.0, 1.0));
   hop->add_option("-t,--threads", hop_request.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
 
+  IcRequest::Zoom& zoom = request.zoom;
+  std::vector<int> zoom_levels;
+  auto* levels_opt = ic->add_option("--levels", zoom_levels,
+                                    "zoom: coarsest, parent and finest grid levels (2^level cells per side), e.g. 5 6 7")
+                         ->expected(3);
+  const std::vector<CLI::Option*> zoom_opts = {
+      levels_opt,
+      ic->add_option("--parent", zoom.parent, "zoom: the parent run's snapshot at z = 0 (without it: write the parent's ICs)"),
+      ic->add_option("--groups", zoom.groups, "zoom: the parent snapshot's friends-of-friends catalogue (fountain fof)"),
+      ic->add_option("--halo", zoom.halo, "zoom: the group to zoom on (default: chosen by mass and isolation)"),
+      ic->add_option("--mass-min", zoom.mass_min, "zoom: smallest M_200 of a candidate [Msun/h]")->capture_default_str(),
+      ic->add_option("--mass-max", zoom.mass_max, "zoom: largest M_200 of a candidate [Msun/h]")->capture_default_str(),
+      ic->add_option("--isolation", zoom.isolation, "zoom: no group of half the candidate's mass within this [Mpc/h]")
+          ->capture_default_str(),
+      ic->add_option("--target", zoom.target, "zoom: high-resolution particles per species wanted")->capture_default_str()};
+
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
   if (is_unknown_command(argc, argv)) {
@@ -200,11 +216,19 @@ int main(int argc, char** argv) {
           if (o->count() > 0)
             throw InputError(fmt::format("option {} applies to the sphere only, not to {}", o->get_name(),
                                          request.problem));
-      if (request.problem != "cosmo")
+      if (request.problem != "cosmo" && request.problem != "zoom")
         for (const CLI::Option* o : cosmo_opts)
           if (o->count() > 0)
-            throw InputError(fmt::format("option {} applies to cosmo only, not to {}", o->get_name(), request.problem));
-      if (request.problem == "cosmo") {
+            throw InputError(fmt::format("option {} applies to cosmo and zoom only, not to {}", o->get_name(),
+                                         request.problem));
+      if (request.problem != "zoom")
+        for (const CLI::Option* o : zoom_opts)
+          if (o->count() > 0)
+            throw InputError(fmt::format("option {} applies to zoom only, not to {}", o->get_name(), request.problem));
+      if (request.problem == "zoom") {
+        if (zoom_levels.size() == 3) zoom.levels = {zoom_levels[0], zoom_levels[1], zoom_levels[2]};
+      }
+      if (request.problem == "cosmo" || request.problem == "zoom") {
         if (gamma_opt->count() > 0)
           throw InputError("option --gamma does not apply to cosmo: comoving runs take gamma = 5/3");
         cosmo.a_start = 1.0 / (1.0 + z_start);
