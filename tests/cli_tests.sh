@@ -516,6 +516,22 @@ cell = fine[0] + f['PartType0/Masses'][0]
 ok = ok and len(coarse) == 2 and np.allclose(coarse / cell, [8, 64], rtol=1e-12)
 sys.exit(0 if ok else 1)
 EOT
+    # The paper's MFB/100: the same zoom at masses / 100, lengths and velocities x 100^(-1/3).
+    # shellcheck disable=SC2086
+    "$bin" ic zoom --levels 3 4 5 $cosmology --parent parent_run/snapshot_0001.hdf5 --groups fof.hdf5 --halo 0 \
+      --target 1000 --mass-scale 0.01 -o small.hdf5 > small.txt 2>&1 || { cat small.txt; fail "scaled zoom ICs"; }
+    "$python" - <<'EOT' || fail "the scaled zoom ICs are wrong"
+import h5py, numpy as np, sys
+a, b = h5py.File('zoom.hdf5', 'r'), h5py.File('small.hdf5', 'r')
+s = 0.01 ** (1 / 3)
+ok = abs(b['Header'].attrs['BoxSize'] / (20 * s) - 1) < 1e-12
+for t in (0, 1, 2):
+    ok = ok and np.allclose(b[f'PartType{t}/Masses'][:], 0.01 * a[f'PartType{t}/Masses'][:], rtol=1e-12)
+    ok = ok and np.allclose(b[f'PartType{t}/Coordinates'][:], s * a[f'PartType{t}/Coordinates'][:], rtol=1e-12, atol=1e-12)
+    ok = ok and np.allclose(b[f'PartType{t}/Velocities'][:], s * a[f'PartType{t}/Velocities'][:], rtol=1e-12, atol=1e-12)
+ok = ok and np.allclose(b['PartType0/InternalEnergy'][:], s * s * a['PartType0/InternalEnergy'][:], rtol=1e-12)
+sys.exit(0 if ok else 1)
+EOT
     sed 's/parent.hdf5/zoom.hdf5/; s/parent_run/zoom_run/; s/a_end: 1/a_end: 0.03/' parent.yml > zoom.yml
     printf 'hydro: {h_max: 2.0}
 ' >> zoom.yml

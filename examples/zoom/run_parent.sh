@@ -3,8 +3,9 @@
 # (64^3 particles in 26.6 Mpc/h, the blocks of the zoom's level-7 field, z = 49 to 0), its
 # friends-of-friends halos, and the zoom's initial conditions on the isolated halo nearest
 # 1e12 Msun/h: level-7 gas and dark matter in the traced region (about 7,440 particles per
-# species), level 6 around it, level 5 elsewhere; and a dark-matter-only version of them, run
-# to z = 0 to check that it reproduces the parent's halo. Resumable: a killed run goes on from
+# species), level 6 around it, level 5 elsewhere; the same at masses / 100 (the paper's
+# MFB/100); and a dark-matter-only version, run to z = 0 to check that it reproduces the
+# parent's halo (check_zoom.py). Resumable: a killed run goes on from
 # its restart file, finished steps are skipped.
 #   sh examples/zoom/run_parent.sh [-t THREADS]
 set -eu
@@ -45,6 +46,10 @@ run parent parent_ics.hdf5 0.01455 $threads
 # shellcheck disable=SC2086
 [ -f zoom_dm_ics.hdf5 ] || "$bin" ic zoom --levels 5 6 7 $cosmology --parent parent/snapshot_0001.hdf5 \
   --groups parent_fof.hdf5 --target 6300 --no-gas -o zoom_dm_ics.hdf5 2>&1 | tee zoom_dm_ics.txt
+# The paper's MFB/100 (COSMOLOGY.md C11.3): the same zoom at masses / 100.
+# shellcheck disable=SC2086
+[ -f zoom_mfb100_ics.hdf5 ] || "$bin" ic zoom --levels 5 6 7 $cosmology --parent parent/snapshot_0001.hdf5 \
+  --groups parent_fof.hdf5 --target 6300 --mass-scale 0.01 -o zoom_mfb100_ics.hdf5
 # The dark-matter zoom: softening 0.035 of the level-7 spacing, the heavier particles' scaled by m^(1/3).
 # shellcheck disable=SC2086
 run zoom_dm zoom_dm_ics.hdf5 0.007275 $threads

@@ -26,6 +26,7 @@ struct IcRequest {
     double mass_min = 6e11, mass_max = 1.5e12;  // M_200 range of candidates (Msun/h)
     double isolation = 2.0;           // no group of half the mass within this (Mpc/h, comoving)
     double target = 6300;             // high-resolution particles per species wanted
+    double mass_scale = 1.0;          // != 1: the zoom scaled to masses x this (the paper's MFB/100)
   } zoom;
 };
 

@@ -46,6 +46,30 @@ std::size_t choose_halo(const io::FofHalos& h, const IcRequest::Zoom& z, const s
   return best;
 }
 
+// The same initial conditions at masses x `scale` (COSMOLOGY.md C11.3, the paper's MFB/100):
+// lengths, the box and velocities x s = scale^(1/3), energies x s^2, so that densities and
+// free-fall times are kept and characteristic temperatures fall by s^2.
+void scale_box(ics::CosmologicalBox& box, double scale) {
+  const double s = std::cbrt(scale);
+  box.box *= s;
+  for (std::size_t i = 0; i < box.dark_matter.size(); ++i) {
+    box.dark_matter.x[i] *= s;
+    box.dark_matter.v[i] *= s;
+    box.dark_matter.v_full[i] *= s;
+    box.dark_matter.mass[i] *= scale;
+  }
+  GasParticles& gas = box.gas;
+  for (std::size_t i = 0; i < gas.size(); ++i) {
+    gas.x[i] *= s;
+    gas.v[i] *= s;
+    gas.v_full[i] *= s;
+    gas.mass[i] *= scale;
+    gas.mass_initial[i] *= scale;
+    gas.u[i] *= s * s;
+    gas.u_full[i] *= s * s;
+  }
+}
+
 }  // namespace
 
 std::string write_zoom_ic(const IcRequest& r) {
@@ -58,6 +82,7 @@ std::string write_zoom_ic(const IcRequest& r) {
   if (z.parent.empty() != z.groups.empty())
     throw InputError("options --parent and --groups go together: the parent run's snapshot at z = 0 and its catalogue");
   if (z.parent.empty()) {
+    if (z.mass_scale != 1.0) throw InputError("option --mass-scale scales a zoom: give --parent and --groups too");
     // The parent run: dark matter only, one particle per parent-level cell.
     c.gas = false;
     const ics::CosmologicalBox box = ics::make_zoom(c, levels, {}, units);
@@ -94,14 +119,17 @@ std::string write_zoom_ic(const IcRequest& r) {
     n_high = per_cell * static_cast<double>(std::count(region.begin(), region.end(), std::uint8_t{1}));
     if (n_high >= z.target) break;
   }
-  const ics::CosmologicalBox box = ics::make_zoom(c, levels, region, units);
+  ics::CosmologicalBox box = ics::make_zoom(c, levels, region, units);
+  if (z.mass_scale != 1.0) scale_box(box, z.mass_scale);
   io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, {c.cosmology, box.a, units});
   std::size_t high = 0;
   for (Species s : box.dark_matter.species) high += s == Species::DarkMatter;
   return fmt::format("wrote {} (zoom on group {} of {}: M_200 = {:.4g} Msun/h, R_200 = {:.4g} Mpc/h; the particles within "
-                     "{} R_200 traced back; {} high-resolution dark matter{} particles, {} low-resolution; z = {}){}",
+                     "{} R_200 traced back; {} high-resolution dark matter{} particles, {} low-resolution; z = {}{}){}",
                      r.output, halo, z.groups, halos.m200[halo], r200, factor, high, c.gas ? " and gas" : "",
                      box.dark_matter.size() - high, 1.0 / c.a_start - 1.0,
+                     z.mass_scale != 1.0 ? fmt::format("; scaled to masses x {:g}, box {:.5g} Mpc/h", z.mass_scale, box.box)
+                                         : std::string(),
                      n_high < z.target ? fmt::format("\nwarning: {:.0f} high-resolution particles per species, under the "
                                                      "{:.0f} wanted even at 5 R_200",
                                                      n_high, z.target)

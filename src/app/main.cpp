@@ -144,7 +144,12 @@ int main(int argc, char** argv) {
       ic->add_option("--mass-max", zoom.mass_max, "zoom: largest M_200 of a candidate [Msun/h]")->capture_default_str(),
       ic->add_option("--isolation", zoom.isolation, "zoom: no group of half the candidate's mass within this [Mpc/h]")
           ->capture_default_str(),
-      ic->add_option("--target", zoom.target, "zoom: high-resolution particles per species wanted")->capture_default_str()};
+      ic->add_option("--target", zoom.target, "zoom: high-resolution particles per species wanted")->capture_default_str(),
+      ic->add_option("--mass-scale", zoom.mass_scale,
+                     "zoom: scale the zoom to masses x this, lengths and velocities x its cube root, energies x its "
+                     "square (0.01: the paper's MFB/100)")
+          ->check(CLI::PositiveNumber)
+          ->capture_default_str()};
 
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
