@@ -7,17 +7,32 @@
 # MFB/100); and a dark-matter-only version, run to z = 0 to check that it reproduces the
 # parent's halo (check_zoom.py). Resumable: a killed run goes on from
 # its restart file, finished steps are skipped.
-#   sh examples/zoom/run_parent.sh [-t THREADS]
+# LEVELS="4 5 6" makes the same at an eighth of the mass resolution (in output_4_5_6/, a
+# high-resolution target of 6300 / 8 per species).
+#   [LEVELS="5 6 7"] sh examples/zoom/run_parent.sh [-t THREADS]
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
 bin="$root/build/fountain"
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+levels=${LEVELS:-5 6 7}
+# shellcheck disable=SC2086
+set -- $levels "$@"
+l0=$1 lp=$2 lmax=$3
+shift 3
+out="$here/output"
+[ "$levels" = "5 6 7" ] || out="$here/output_${l0}_${lp}_${lmax}"
+mkdir -p "$out"
+cd "$out"
+py=/usr/bin/python3
+# Softenings 0.035 of each level's spacing (comoving); the high-resolution target scaled with
+# the finest level's cell mass.
+parent_softening=$($py -c "print(f'{0.035 * 26.6 / 2 ** $lp:.6g}')")
+zoom_softening=$($py -c "print(f'{0.035 * 26.6 / 2 ** $lmax:.6g}')")
+target=$($py -c "print(round(6300 / 8 ** (7 - $lmax)))")
 cosmology="--box 26.6 --z-start 49 --seed 1 --omega-m 0.3 --omega-lambda 0.7 --omega-b 0.03 --hubble 0.6 --sigma-8 0.9"
 # shellcheck disable=SC2086
-[ -f parent_ics.hdf5 ] || "$bin" ic zoom --levels 5 6 7 $cosmology -o parent_ics.hdf5
+[ -f parent_ics.hdf5 ] || "$bin" ic zoom --levels $levels $cosmology -o parent_ics.hdf5
 run() {  # run NAME ICS SOFTENING [OPTIONS...]
   name=$1 ics=$2 softening=$3
   shift 3
@@ -35,23 +50,22 @@ EOT
     "$bin" run "$name.yml" -q "$@"
   fi
 }
-# Comoving softening 0.035 of the parent's spacing (26.6 / 64 Mpc/h).
 threads="$*"
 # shellcheck disable=SC2086
-run parent parent_ics.hdf5 0.01455 $threads
+run parent parent_ics.hdf5 "$parent_softening" $threads
 [ -f parent_fof.hdf5 ] || "$bin" fof parent/snapshot_0001.hdf5 -o parent_fof.hdf5 $threads
 # shellcheck disable=SC2086
-[ -f zoom_ics.hdf5 ] || "$bin" ic zoom --levels 5 6 7 $cosmology --parent parent/snapshot_0001.hdf5 \
-  --groups parent_fof.hdf5 --target 6300 -o zoom_ics.hdf5 2>&1 | tee zoom_ics.txt
+[ -f zoom_ics.hdf5 ] || "$bin" ic zoom --levels $levels $cosmology --parent parent/snapshot_0001.hdf5 \
+  --groups parent_fof.hdf5 --target $target -o zoom_ics.hdf5 2>&1 | tee zoom_ics.txt
 # shellcheck disable=SC2086
-[ -f zoom_dm_ics.hdf5 ] || "$bin" ic zoom --levels 5 6 7 $cosmology --parent parent/snapshot_0001.hdf5 \
-  --groups parent_fof.hdf5 --target 6300 --no-gas -o zoom_dm_ics.hdf5 2>&1 | tee zoom_dm_ics.txt
+[ -f zoom_dm_ics.hdf5 ] || "$bin" ic zoom --levels $levels $cosmology --parent parent/snapshot_0001.hdf5 \
+  --groups parent_fof.hdf5 --target $target --no-gas -o zoom_dm_ics.hdf5 2>&1 | tee zoom_dm_ics.txt
 # The paper's MFB/100 (COSMOLOGY.md C11.3): the same zoom at masses / 100.
 # shellcheck disable=SC2086
-[ -f zoom_mfb100_ics.hdf5 ] || "$bin" ic zoom --levels 5 6 7 $cosmology --parent parent/snapshot_0001.hdf5 \
-  --groups parent_fof.hdf5 --target 6300 --mass-scale 0.01 -o zoom_mfb100_ics.hdf5
-# The dark-matter zoom: softening 0.035 of the level-7 spacing, the heavier particles' scaled by m^(1/3).
+[ -f zoom_mfb100_ics.hdf5 ] || "$bin" ic zoom --levels $levels $cosmology --parent parent/snapshot_0001.hdf5 \
+  --groups parent_fof.hdf5 --target $target --mass-scale 0.01 -o zoom_mfb100_ics.hdf5
+# The dark-matter zoom: the heavier particles' softenings scaled by m^(1/3).
 # shellcheck disable=SC2086
-run zoom_dm zoom_dm_ics.hdf5 0.007275 $threads
+run zoom_dm zoom_dm_ics.hdf5 "$zoom_softening" $threads
 [ -f zoom_dm_fof.hdf5 ] || "$bin" fof zoom_dm/snapshot_0001.hdf5 -o zoom_dm_fof.hdf5 $threads
 /usr/bin/python3 "$here/check_zoom.py" parent_fof.hdf5 zoom_dm_fof.hdf5 zoom_dm/snapshot_0001.hdf5 zoom_dm_ics.txt
