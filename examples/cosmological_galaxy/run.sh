@@ -20,7 +20,7 @@ mode=${MODE:-default}
 set -- $levels "$@"
 lmax=$3
 shift 3
-LEVELS="$levels" sh "$root/examples/zoom/run_parent.sh" "$@"
+LEVELS="$levels" CHECK=0 sh "$root/examples/zoom/run_parent.sh" "$@"
 zoom="$root/examples/zoom/output"
 [ "$levels" = "5 6 7" ] || zoom="$root/examples/zoom/output_$(echo "$levels" | tr ' ' _)"
 out="$here/output_$(echo "$levels" | tr ' ' _)_$mode"
@@ -53,7 +53,9 @@ for run in ${RUNS:-SPH MSPH MFB MFB100}; do
   box=$($py -c "print(26.6 * $s)")
   soft=$($py -c "print(f'{0.012 * $scale * $s:.6g}')")
   soft_max=$($py -c "print(f'{0.006 * $scale * $s:.6g}')")
-  h_max=$($py -c "print(f'{0.5 * $s:.6g}')")
+  # Gas exists only in the high-resolution region: its edge particles need h past their
+  # half-empty surroundings, five of the finest spacings at most.
+  h_max=$($py -c "print(f'{5 * 26.6 / 2 ** $lmax * $s:.6g}')")
   cat > "$dir/params.yml" <<EOT
 initial_conditions: {file: $ics, periodic: true}
 cosmology: {enabled: true, omega_m: 0.3, omega_lambda: 0.7, omega_b: 0.03, hubble_param: 0.6, a_end: 1}

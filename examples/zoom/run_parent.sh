@@ -5,7 +5,7 @@
 # 1e12 Msun/h: level-7 gas and dark matter in the traced region (about 7,440 particles per
 # species), level 6 around it, level 5 elsewhere; the same at masses / 100 (the paper's
 # MFB/100); and a dark-matter-only version, run to z = 0 to check that it reproduces the
-# parent's halo (check_zoom.py). Resumable: a killed run goes on from
+# parent's halo (check_zoom.py; CHECK=0 skips it). Resumable: a killed run goes on from
 # its restart file, finished steps are skipped.
 # LEVELS="4 5 6" makes the same at an eighth of the mass resolution (in output_4_5_6/, a
 # high-resolution target of 6300 / 8 per species).
@@ -64,7 +64,8 @@ run parent parent_ics.hdf5 "$parent_softening" $threads
 # shellcheck disable=SC2086
 [ -f zoom_mfb100_ics.hdf5 ] || "$bin" ic zoom --levels $levels $cosmology --parent parent/snapshot_0001.hdf5 \
   --groups parent_fof.hdf5 --target $target --mass-scale 0.01 -o zoom_mfb100_ics.hdf5
-# The dark-matter zoom: the heavier particles' softenings scaled by m^(1/3).
+# The dark-matter zoom (skipped with CHECK=0): the heavier particles' softenings scaled by m^(1/3).
+[ "${CHECK:-1}" = 1 ] || exit 0
 # shellcheck disable=SC2086
 run zoom_dm zoom_dm_ics.hdf5 "$zoom_softening" $threads
 [ -f zoom_dm_fof.hdf5 ] || "$bin" fof zoom_dm/snapshot_0001.hdf5 -o zoom_dm_fof.hdf5 $threads

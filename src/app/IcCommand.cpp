@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <chrono>
 #include <cmath>
 #include <type_traits>
 #include <fstream>
@@ -125,8 +126,17 @@ std::string write_ic(const IcRequest& r) {
     ics::CosmologicalBoxParams c = r.cosmo;
     c.level = static_cast<int>(std::lround(std::log2(n)));
     const Units units;  // h-scaled: Mpc/h, Msun/h, km/s
-    const ics::CosmologicalBox box = ics::make_cosmological_box(c, units);
+    // Progress on stderr for boxes that take more than a moment.
+    const auto start = std::chrono::steady_clock::now();
+    auto progress = [&](const std::string& stage) {
+      if (n >= 128)
+        fmt::print(stderr, "[{:6.1f} s] {}\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(),
+                   stage);
+    };
+    const ics::CosmologicalBox box = ics::make_cosmological_box(c, units, progress);
+    progress("writing " + r.output);
     io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, {c.cosmology, box.a, units});
+    progress("done");
     double rms = 0.0;
     for (std::size_t i = 0; i < box.dark_matter.size(); ++i) {
       const std::size_t cells = static_cast<std::size_t>(n);

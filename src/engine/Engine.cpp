@@ -647,9 +647,11 @@ void Engine::run_graph(StepInfo* info) {
                  steps == 10 ? "; from here on every 1000th is printed" : "");
   };
   // Harmless: the cells are recut and the next step solves h in full.
+  // A comoving run's clock reads ln a: its messages say a.
+  const std::string when = comoving_ ? fmt::format("a = {:.6g}", scale_factor()) : fmt::format("t = {}", time());
   if (info && ctx_->h_capped > 0)
-    warn_step(h_capped_steps_, fmt::format("{} particles had h capped by their cell's reach at t = {}; rebuilding",
-                                           ctx_->h_capped.load(), time()));
+    warn_step(h_capped_steps_, fmt::format("{} particles had h capped by their cell's reach at {}; rebuilding",
+                                           ctx_->h_capped.load(), when));
   // Not harmless: these particles keep fewer neighbours than hydro.neighbours, so their
   // density is overestimated. Counted for the run's summary too.
   h_min_held_particles_ += ctx_->h_min_held;
@@ -657,9 +659,9 @@ void Engine::run_graph(StepInfo* info) {
   if (ctx_->h_max_capped > 0) {
     h_max_capped_particles_ += ctx_->h_max_capped;
     warn_step(h_max_capped_steps_,
-              fmt::format("{} particles were held at hydro.h_max = {} at t = {} with fewer than hydro.neighbours = {} "
+              fmt::format("{} particles were held at hydro.h_max = {} at {} with fewer than hydro.neighbours = {} "
                           "neighbours, so their densities are too high",
-                          ctx_->h_max_capped.load(), config_.hydro.h_max, time(), config_.hydro.neighbours));
+                          ctx_->h_max_capped.load(), config_.hydro.h_max, when, config_.hydro.neighbours));
   }
 }
 

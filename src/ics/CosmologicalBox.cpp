@@ -74,11 +74,15 @@ double cell_matter(const CosmologicalBoxParams& p, int level, const Units& units
   return p.cosmology.omega_m * rho_crit * cell * cell * cell;
 }
 
-CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Units& units) {
+CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Units& units, const IcProgress& progress) {
+  auto stage = [&](const char* what) {
+    if (progress) progress(what);
+  };
   if (p.level < 1 || p.level > 12)
     throw InputError(fmt::format("a cosmological box needs 2^level particles per side with level in [1, 12], not {}",
                                  p.level));
   if (!(p.a_start > 0.0 && p.a_start < 1.0)) throw InputError(fmt::format("starting scale factor {} is not in (0, 1)", p.a_start));
+  stage("white noise and the linear density");
   const SpectralField delta = linear_density(p);
   const double cell_mass = cell_matter(p, p.level, units);
   const double gas_fraction = p.gas ? p.cosmology.omega_b / p.cosmology.omega_m : 0.0;
@@ -91,6 +95,7 @@ CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Unit
     return x;
   };
   {
+    stage(p.lpt_order >= 2 ? "dark matter: Zel'dovich and second-order displacements" : "dark matter: Zel'dovich displacements");
     const LatticeParticles lattice = lagrangian_particles(delta, p, 0.0);
     CollisionlessParticles& dm = out.dark_matter;
     dm.resize(lattice.x.size());
@@ -103,6 +108,7 @@ CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Unit
     }
   }
   if (p.gas) {
+    stage("gas: the same fields half a cell on");
     const LatticeParticles lattice = lagrangian_particles(delta, p, 0.5);
     GasParticles& gas = out.gas;
     gas.resize(lattice.x.size());

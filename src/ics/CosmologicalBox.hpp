@@ -1,6 +1,8 @@
 // Initial conditions of a periodic cosmological box: dark matter (and gas) on a lattice displaced by Zel'dovich or 2LPT from a Gaussian field.
 #pragma once
 #include <cstdint>
+#include <functional>
+#include <string>
 #include <vector>
 
 #include "core/Units.hpp"
@@ -38,7 +40,9 @@ struct CosmologicalBox {
   double box = 0.0;
   double a = 0.0;
 };
-CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Units& units);
+// `progress` (when set) hears each stage as it starts: long generations show where they are.
+using IcProgress = std::function<void(const std::string& stage)>;
+CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Units& units, const IcProgress& progress = {});
 
 // The linear density contrast at z = 0 (D = 1) the box is made from, as Fourier coefficients:
 // each cell's white noise, transformed, times sqrt(P(k) / (L/N)^3).
