@@ -10,8 +10,9 @@ region's baryons by temperature and by density), fig8.png (Fig 6 for MFB/100) an
 (the paper's claims at z = 0 beside the measured numbers).
 
 Phases as the paper's: cold gas rho > 0.1 rho* (physical) and T < 2 T*, T* = 4e4 K; stars
-include the gas's hidden stellar mass. The star formation rate of a group is the growth of its
-stellar mass between outputs over the cosmic time between them.
+include the gas's hidden stellar mass. The star formation rate of a group is the stellar mass
+formed in it between outputs (its gas's growth of hidden stellar mass and its star particles
+born since, not the stars its mergers bring) over the cosmic time between them.
 """
 import glob
 import os
@@ -42,6 +43,8 @@ def cosmic_time(a, om=0.3, ol=0.7):
 def measure(run_dir):
     """Per output: the largest HOP group's masses and the whole region's fractions."""
     rows = []
+    hidden_before = {}  # gas ID -> hidden stellar mass at the previous output
+    a_before = None
     for snap in sorted(glob.glob(os.path.join(run_dir, "snapshot_*.hdf5"))):
         hop = os.path.join(run_dir, "hop_" + os.path.basename(snap)[len("snapshot_"):])
         with h5py.File(snap, "r") as f:
@@ -58,6 +61,7 @@ def measure(run_dir):
             promoted = g["Promoted"][:] if "Promoted" in g else np.zeros(len(m), dtype=bool)
             star_ids = f["PartType4/ParticleIDs"][:] if n[4] > 0 else np.zeros(0, dtype=np.uint64)
             star_m = f["PartType4/Masses"][:] if n[4] > 0 else np.zeros(0)
+            born = f["PartType4/BirthTime"][:] if n[4] > 0 else np.zeros(0)
         rho_star = RHO_STAR_CGS / (RHO_UNIT_CGS * h * h) * a**3  # comoving
         cold = (rho > 0.1 * rho_star) & (temp < 2 * T_STAR)
         total = m.sum() + hidden.sum() + star_m.sum()
@@ -74,7 +78,7 @@ def measure(run_dir):
                 "diffuse": m[rho <= 10 * mean_b].sum() / total,
             },
         }
-        group = dict(baryons=0.0, stars=0.0, cold=0.0, hot_warm=0.0, promoted=0.0)
+        group = dict(baryons=0.0, stars=0.0, cold=0.0, hot_warm=0.0, promoted=0.0, formed=0.0)
         if os.path.exists(hop):
             with h5py.File(hop, "r") as c:
                 if c["Header"].attrs["Ngroups_Total"] > 0:
@@ -87,12 +91,21 @@ def measure(run_dir):
                     group["hot_warm"] = m[in_gas & ~cold].sum()
                     group["promoted"] = m[in_gas & ~cold & (promoted > 0)].sum()
                     group["baryons"] = m[in_gas].sum() + group["stars"]
+                    # Stars formed in the group since the previous output: its gas's growth of
+                    # hidden stellar mass, and its star particles born since (a merger's stars
+                    # are not counted).
+                    if a_before is not None:
+                        grown = [hidden[k] - hidden_before.get(i, 0.0) for k, i in enumerate(ids) if in_gas[k]]
+                        group["formed"] = sum(max(g, 0.0) for g in grown)
+                        group["formed"] += star_m[in_stars & (born > a_before)].sum()
         row["group"] = group
         rows.append(row)
+        hidden_before = dict(zip(ids.tolist(), hidden))
+        a_before = a
     for before, after in zip(rows, rows[1:]):
         # 1/H0 is a hundredth of the internal time unit; the h of years/h cancels that of Msun/h.
         dt = (cosmic_time(after["a"]) - cosmic_time(before["a"])) / 100.0 * YEARS_PER_TIME
-        after["group"]["sfr"] = max(after["group"]["stars"] - before["group"]["stars"], 0.0) / dt
+        after["group"]["sfr"] = after["group"]["formed"] / dt
     if rows:
         rows[0]["group"]["sfr"] = 0.0
     return rows

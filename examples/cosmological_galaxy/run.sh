@@ -78,7 +78,7 @@ EOT
   fi
   for snap in "$dir"/snapshot_*.hdf5; do
     hop="$dir/hop_$(basename "$snap" | sed 's/snapshot_//')"
-    [ -f "$hop" ] || "$bin" hop "$snap" -o "$hop" "$@" > /dev/null
+    [ -f "$hop" ] || "$bin" hop "$snap" -o "$hop" "$@" 2>> "$dir/hop.log"
   done
 done
 $py "$here/plot_cosmological_galaxy.py" "$out"
