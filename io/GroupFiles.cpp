@@ -21,6 +21,20 @@ double header_scalar(const hdf5::File& f, const char* name, double fallback, boo
   if (v.empty() || !std::isfinite(v[0])) f.fail(std::string(kHeader) + "/" + name, "is empty or not finite");
   return v[0];
 }
+// What both catalogues' headers say: the counts, and the snapshot's time, cosmology and path.
+void write_catalogue_header(hdf5::File& f, std::size_t groups, std::size_t ids, const GroupInput& input,
+                            const std::string& snapshot) {
+  f.create_group(kHeader);
+  f.write_attribute(kHeader, "Ngroups_Total", static_cast<std::int64_t>(groups));
+  f.write_attribute(kHeader, "Nids_Total", static_cast<std::int64_t>(ids));
+  f.write_attribute(kHeader, "BoxSize", input.box);
+  f.write_attribute(kHeader, "Time", input.time);
+  f.write_attribute(kHeader, "Redshift", input.cosmological ? 1.0 / input.time - 1.0 : 0.0);
+  f.write_attribute(kHeader, "Omega0", input.omega_m);
+  f.write_attribute(kHeader, "OmegaLambda", input.omega_lambda);
+  f.write_attribute(kHeader, "HubbleParam", input.hubble_param);
+  f.write_attribute(kHeader, "Snapshot", snapshot);
+}
 }  // namespace
 
 GroupInput read_group_input(const std::string& path) {
@@ -122,16 +136,7 @@ void write_fof_catalogue(const std::string& path, const std::vector<groups::Grou
       member_type.push_back(input.particles.type[i]);
     }
   }
-  f.create_group(kHeader);
-  f.write_attribute(kHeader, "Ngroups_Total", static_cast<std::int64_t>(n));
-  f.write_attribute(kHeader, "Nids_Total", static_cast<std::int64_t>(ids.size()));
-  f.write_attribute(kHeader, "BoxSize", input.box);
-  f.write_attribute(kHeader, "Time", input.time);
-  f.write_attribute(kHeader, "Redshift", input.cosmological ? 1.0 / input.time - 1.0 : 0.0);
-  f.write_attribute(kHeader, "Omega0", input.omega_m);
-  f.write_attribute(kHeader, "OmegaLambda", input.omega_lambda);
-  f.write_attribute(kHeader, "HubbleParam", input.hubble_param);
-  f.write_attribute(kHeader, "Snapshot", info.snapshot);
+  write_catalogue_header(f, n, ids.size(), input, info.snapshot);
   f.write_attribute(kHeader, "LinkingLength", info.linking_length);
   f.write_attribute(kHeader, "LinkingLengthFactor", info.b);
   f.write_attribute(kHeader, "MinimumMembers", static_cast<std::int64_t>(info.min_members));
@@ -212,16 +217,7 @@ void write_hop_catalogue(const std::string& path, const groups::HopResult& hop, 
     vel[g] = momentum * (1.0 / group.mass);
   }
   const groups::HopParameters& p = info.parameters;
-  f.create_group(kHeader);
-  f.write_attribute(kHeader, "Ngroups_Total", static_cast<std::int64_t>(n));
-  f.write_attribute(kHeader, "Nids_Total", static_cast<std::int64_t>(ids.size()));
-  f.write_attribute(kHeader, "BoxSize", input.box);
-  f.write_attribute(kHeader, "Time", input.time);
-  f.write_attribute(kHeader, "Redshift", input.cosmological ? 1.0 / input.time - 1.0 : 0.0);
-  f.write_attribute(kHeader, "Omega0", input.omega_m);
-  f.write_attribute(kHeader, "OmegaLambda", input.omega_lambda);
-  f.write_attribute(kHeader, "HubbleParam", input.hubble_param);
-  f.write_attribute(kHeader, "Snapshot", info.snapshot);
+  write_catalogue_header(f, n, ids.size(), input, info.snapshot);
   f.write_attribute(kHeader, "NDens", static_cast<std::int64_t>(p.n_dens));
   f.write_attribute(kHeader, "NHop", static_cast<std::int64_t>(p.n_hop));
   f.write_attribute(kHeader, "NMerge", static_cast<std::int64_t>(p.n_merge));

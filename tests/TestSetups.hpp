@@ -1,5 +1,7 @@
 // Small particle sets and run configurations shared by the tests.
 #pragma once
+#include <functional>
+#include <numbers>
 #include <random>
 
 #include "engine/RunConfig.hpp"
@@ -39,6 +41,34 @@ inline void add_random(GasParticles& g, std::size_t n, const Vec3& lo, const Vec
     g.h[k] = 0.0;
     g.time_bin[k] = 0;
   }
+}
+
+// rho_crit0 in Msun/h per (Mpc/h)^3 with Fountain's G (internal units Mpc, Msun, km/s; H0 = 100).
+inline double critical_density() {
+  return 3.0 * 100.0 * 100.0 / (8.0 * std::numbers::pi * Units().gravitational_constant());
+}
+
+// Gas on a cubic lattice of n^3 cells in a periodic box of side L, the whole matter content of
+// the universe (Omega_m = Omega_b: gas only), with comoving energy u' and velocity v'(x) (at
+// rest by default).
+inline GasParticles lattice_gas(int n, double box, double omega_m, double u_comoving,
+                                const std::function<Vec3(const Vec3&)>& velocity = {}) {
+  GasParticles g;
+  g.resize(static_cast<std::size_t>(n) * n * n);
+  const double spacing = box / n;
+  const double mass = omega_m * critical_density() * box * box * box / static_cast<double>(g.size());
+  std::size_t k = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int l = 0; l < n; ++l, ++k) {
+        g.id[k] = k + 1;
+        g.mass[k] = mass;
+        g.x[k] = {(i + 0.5) * spacing, (j + 0.5) * spacing, (l + 0.5) * spacing};
+        g.v[k] = g.v_full[k] = velocity ? velocity(g.x[k]) : Vec3{};
+        g.u[k] = g.u_full[k] = u_comoving;
+        g.h[k] = 0.0;
+      }
+  return g;
 }
 
 }  // namespace fountain::test

@@ -1,6 +1,8 @@
 // Comoving runs against exact answers: a uniform expanding box stays as it is, and Zel'dovich's plane wave follows its solution.
 #include <gtest/gtest.h>
 
+#include "TestSetups.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -20,35 +22,11 @@
 namespace fountain {
 namespace {
 
-// rho_crit0 in Msun/h per (Mpc/h)^3 with Fountain's G (internal units Mpc, Msun, km/s; H0 = 100).
-double critical_density() {
-  const Units units;
-  return 3.0 * 100.0 * 100.0 / (8.0 * std::numbers::pi * units.gravitational_constant());
-}
+using test::critical_density;
+using test::lattice_gas;
 
 // u in (km/s)^2 of gas at temperature T (K) and mean molecular weight mu, gamma = 5/3.
 double energy_of_temperature(double T, double mu) { return T / (121.147 * (2.0 / 3.0) * mu); }
-
-// Gas on a cubic lattice of n^3 cells in a periodic box of side L, the whole matter content
-// of the universe (Omega_m = Omega_b: gas only), at rest in comoving coordinates.
-GasParticles lattice_gas(int n, double box, double omega_m, double u_comoving) {
-  GasParticles g;
-  g.resize(static_cast<std::size_t>(n) * n * n);
-  const double spacing = box / n;
-  const double mass = omega_m * critical_density() * box * box * box / static_cast<double>(g.size());
-  std::size_t k = 0;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int l = 0; l < n; ++l, ++k) {
-        g.id[k] = k + 1;
-        g.mass[k] = mass;
-        g.x[k] = {(i + 0.5) * spacing, (j + 0.5) * spacing, (l + 0.5) * spacing};
-        g.v[k] = g.v_full[k] = {};
-        g.u[k] = g.u_full[k] = u_comoving;
-        g.h[k] = 0.0;
-      }
-  return g;
-}
 
 RunConfig comoving_config(double box, double omega_m, double omega_lambda, double a_begin, double a_end, int mesh) {
   RunConfig c;

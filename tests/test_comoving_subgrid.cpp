@@ -1,6 +1,8 @@
 // Cooling, star formation and feedback in comoving runs: physical thresholds and rates from comoving variables, against independent solutions.
 #include <gtest/gtest.h>
 
+#include "TestSetups.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -17,29 +19,8 @@
 namespace fountain {
 namespace {
 
-// rho_crit0 in internal (h-scaled) units, H0 = 100.
-double critical_density() { return 3.0 * 100.0 * 100.0 / (8.0 * std::numbers::pi * Units().gravitational_constant()); }
-
-// Gas on a cubic lattice of n^3 cells filling a periodic box of side L with the universe's
-// whole matter content (gas only), at comoving velocity v'(x) and comoving energy u'.
-template <class Velocity>
-GasParticles lattice_gas(int n, double box, double omega_m, double u_comoving, Velocity velocity) {
-  GasParticles g;
-  g.resize(static_cast<std::size_t>(n) * n * n);
-  const double spacing = box / n;
-  const double mass = omega_m * critical_density() * box * box * box / static_cast<double>(g.size());
-  std::size_t k = 0;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int l = 0; l < n; ++l, ++k) {
-        g.id[k] = k + 1;
-        g.mass[k] = mass;
-        g.x[k] = {(i + 0.5) * spacing, (j + 0.5) * spacing, (l + 0.5) * spacing};
-        g.v[k] = g.v_full[k] = velocity(g.x[k]);
-        g.u[k] = g.u_full[k] = u_comoving;
-      }
-  return g;
-}
+using test::critical_density;
+using test::lattice_gas;
 
 RunConfig comoving_config(double box, double hubble_param, double a_begin, double a_end) {
   RunConfig c;
