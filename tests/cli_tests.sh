@@ -342,6 +342,8 @@ output:
   directory: $1
   statistics_every: 20
   scale_factors: [0.1]
+  fof_groups: true
+  hop_groups: true
 ${2:-}
 EOT
     }
@@ -356,6 +358,17 @@ with h5py.File('outA/snapshot_0002.hdf5', 'r') as f:
     if [ "$case_name" = comoving_galaxy_bitwise ]; then
       gparams out1; "$bin" run params.yml -q -t 1 > run1.txt 2>&1 || { cat run1.txt; fail "1-thread run"; }
       "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0002.hdf5 out1/snapshot_0002.hdf5
+      # The catalogues written beside the snapshots (output.fof_groups, output.hop_groups).
+      "$python" - <<'EOT' || fail "the in-run catalogues differ or are empty"
+import h5py, numpy as np, sys
+ok = True
+for name in ('fof_0002.hdf5', 'hop_0002.hdf5'):
+    a, b = h5py.File('outA/' + name, 'r'), h5py.File('out1/' + name, 'r')
+    ok = ok and a['Header'].attrs['Ngroups_Total'] > 0
+    for d in ('Group/GroupLen', 'Group/GroupMass', 'IDs/ID'):
+        ok = ok and np.array_equal(a[d][:], b[d][:])
+sys.exit(0 if ok else 1)
+EOT
     else
       gparams outB "restart:
   every_steps: 50"

@@ -121,8 +121,12 @@ bool is_dump_name(const std::string& name) {
                             "timeline_step#_rank#.csv"});
 }
 
+// The group catalogues a comoving run may write beside its snapshots (output.fof_groups, hop_groups).
+bool is_catalogue_name(const std::string& name) { return matches_any(name, {"fof_#.hdf5", "hop_#.hdf5"}); }
+
 bool matches_output_name(const std::string& basename, const std::string& name) {
-  return is_snapshot_name(basename, name) || is_restart_name(name) || is_dump_name(name) || name == "statistics.txt";
+  return is_snapshot_name(basename, name) || is_restart_name(name) || is_dump_name(name) || is_catalogue_name(name) ||
+         name == "statistics.txt";
 }
 
 fs::path canonical_or_normal(const fs::path& p) {
@@ -143,7 +147,7 @@ std::vector<std::string> earlier_run_outputs(const std::string& directory, const
   std::error_code ec;
   for (const auto& entry : fs::directory_iterator(directory, ec)) {
     const std::string name = entry.path().filename().string();
-    if (is_snapshot_name(basename, name) || is_restart_name(name) || name == "statistics.txt")
+    if (is_snapshot_name(basename, name) || is_restart_name(name) || is_catalogue_name(name) || name == "statistics.txt")
       found.push_back(entry.path().string());
   }
   std::sort(found.begin(), found.end());

@@ -1,5 +1,7 @@
 #include "app/OutputSchedule.hpp"
 
+#include "app/GroupCommand.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -72,6 +74,27 @@ void SnapshotSeries::write() {
       fmt::print(stderr, "snapshot {} at a = {:.6g} (z = {:.6g})\n", path, info_.time, 1.0 / info_.time - 1.0);
     } else {
       fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info_.time);
+    }
+  }
+  // Groups found in the snapshot just written, as `fountain fof` and `fountain hop` would.
+  const OutputConfig& out = config_.output;
+  if (engine_.rank() == 0 && (out.fof_groups || out.hop_groups)) {
+    if (out.fof_groups) {
+      FofRequest fof;
+      fof.snapshot = path;
+      fof.output = fmt::format("{}/fof_{:04d}.hdf5", out.directory, written_);
+      fof.threads = config_.threads;
+      const std::string line = find_groups(fof);
+      if (!quiet_) fmt::print(stderr, "{}\n", line);
+    }
+    if (out.hop_groups && engine_.gas().size() + engine_.dark_matter().count(Species::Star) > 0) {
+      HopRequest hop;
+      hop.snapshot = path;
+      hop.output = fmt::format("{}/hop_{:04d}.hdf5", out.directory, written_);
+      hop.omega_b = config_.comoving.cosmology.omega_b;
+      hop.threads = config_.threads;
+      const std::string line = find_hop_groups(hop);
+      if (!quiet_) fmt::print(stderr, "{}\n", line);
     }
   }
   ++written_;

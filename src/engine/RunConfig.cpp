@@ -24,7 +24,7 @@ void read_comoving(const ParameterFile& p, RunConfig& c) {
       "cosmology.a_begin", "cosmology.a_end", "output.scale_factors", "output.redshifts",
       "time_integration.max_dln_a", "initial_conditions.length_unit_cgs", "initial_conditions.mass_unit_cgs",
       "initial_conditions.velocity_unit_cgs", "initial_conditions.velocity_convention",
-      "initial_conditions.h_scaled"};
+      "initial_conditions.h_scaled", "output.fof_groups", "output.hop_groups"};
   if (!cc.enabled) {
     for (const char* key : comoving_only)
       if (p.was_given(key))
@@ -112,6 +112,8 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.output.dump_task_graph = p.flag("output.dump_task_graph");
   c.output.dump_timeline_every = p.integer("output.dump_timeline_every");
   c.output.statistics_every = p.integer("output.statistics_every");
+  c.output.fof_groups = p.flag("output.fof_groups");
+  c.output.hop_groups = p.flag("output.hop_groups");
   c.restart.every_steps = p.integer("restart.every_steps");
   c.restart.every_minutes = p.real("restart.every_minutes");
   c.parameters_yaml = p.used_as_yaml();

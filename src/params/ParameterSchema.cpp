@@ -99,7 +99,11 @@ const std::vector<ParamSpec>& parameter_schema() {
       integer("output.dump_timeline_every", "0", 0, 1e15,
               "Write a per-task timeline (CSV) every this many steps; 0 never."),
       integer("output.statistics_every", "0", 0, 1e15,
-              "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never. Not yet in comoving runs."),
+              "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never. Comoving runs: physical values, the time column a."),
+      boolean("output.fof_groups", "false",
+              "Comoving runs: find each snapshot's friends-of-friends halos as it is written (fountain fof's defaults), into <output.directory>/fof_NNNN.hdf5."),
+      boolean("output.hop_groups", "false",
+              "Comoving runs: find each snapshot's HOP groups of the baryons as it is written (fountain hop's defaults), into <output.directory>/hop_NNNN.hdf5."),
       // restart
       integer("restart.every_steps", "0", 0, 1e15,
               "A restart file <output.directory>/restart.hdf5 falls due every this many steps; it is written at the next recut of the cells after that (a few to a few tens of steps later, so writing it changes nothing in the run; if none comes within 1000 steps the cells are recut for it). The first is written at the start. 0: never (SIGTERM always writes one)."),
