@@ -71,4 +71,28 @@ inline GasParticles lattice_gas(int n, double box, double omega_m, double u_como
   return g;
 }
 
+// A comoving run of a periodic box (gas only unless the caller adds dark matter: Omega_b =
+// Omega_m, h = 1) from a_begin to a_end with TreePM on a mesh of `mesh` cells; steps bound by
+// 0.01 in ln a and the particles' criteria.
+inline RunConfig comoving_config(double box, double omega_m, double omega_lambda, double a_begin, double a_end, int mesh) {
+  RunConfig c;
+  c.threads = 2;
+  c.comoving.enabled = true;
+  c.comoving.cosmology = {omega_m, omega_lambda, omega_m, 1.0};
+  c.comoving.a_begin = a_begin;
+  c.comoving.a_end = a_end;
+  c.hydro.neighbours = 32;
+  c.hydro.neighbours_tolerance = 1e-6;
+  c.hydro.max_h_iterations = 100;
+  c.integration.dt_min = 1e-12;
+  c.integration.dt_max = 1.0;  // the step in ln a (0.01) and the particles' criteria rule
+  c.integration.max_dln_a = 0.01;
+  c.space.periodic = true;
+  c.space.box_size = {box, box, box};
+  c.gravity.enabled = true;
+  c.gravity.mesh_cells = mesh;
+  c.gravity.G = Units().gravitational_constant();
+  return c;
+}
+
 }  // namespace fountain::test

@@ -23,31 +23,11 @@ namespace fountain {
 namespace {
 
 using test::critical_density;
+using test::comoving_config;
 using test::lattice_gas;
 
 // u in (km/s)^2 of gas at temperature T (K) and mean molecular weight mu, gamma = 5/3.
 double energy_of_temperature(double T, double mu) { return T / (121.147 * (2.0 / 3.0) * mu); }
-
-RunConfig comoving_config(double box, double omega_m, double omega_lambda, double a_begin, double a_end, int mesh) {
-  RunConfig c;
-  c.threads = 2;
-  c.comoving.enabled = true;
-  c.comoving.cosmology = {omega_m, omega_lambda, omega_m, 1.0};
-  c.comoving.a_begin = a_begin;
-  c.comoving.a_end = a_end;
-  c.hydro.neighbours = 32;
-  c.hydro.neighbours_tolerance = 1e-6;
-  c.hydro.max_h_iterations = 100;
-  c.integration.dt_min = 1e-12;
-  c.integration.dt_max = 1.0;  // the step in ln a (0.01) and the particles' criteria rule
-  c.integration.max_dln_a = 0.01;
-  c.space.periodic = true;
-  c.space.box_size = {box, box, box};
-  c.gravity.enabled = true;
-  c.gravity.mesh_cells = mesh;
-  c.gravity.G = Units().gravitational_constant();
-  return c;
-}
 
 // COSMOLOGY.md C10.2: a uniform box at rest in comoving coordinates stays so while it
 // expands 64-fold: every particle keeps u' (T falls as a^-2), rho' and its place. A lattice

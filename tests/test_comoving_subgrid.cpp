@@ -22,24 +22,12 @@ namespace {
 using test::critical_density;
 using test::lattice_gas;
 
+// The shared comoving configuration at Omega_m 0.3, Omega_Lambda 0.7 and the given h, with a
+// 16^3 mesh and a gas softening of 1/20 of an 8^3 lattice's spacing.
 RunConfig comoving_config(double box, double hubble_param, double a_begin, double a_end) {
-  RunConfig c;
-  c.threads = 2;
-  c.comoving.enabled = true;
-  c.comoving.cosmology = {0.3, 0.7, 0.3, hubble_param};
-  c.comoving.a_begin = a_begin;
-  c.comoving.a_end = a_end;
-  c.hydro.neighbours = 32;
-  c.hydro.neighbours_tolerance = 1e-6;
-  c.hydro.max_h_iterations = 100;
+  RunConfig c = test::comoving_config(box, 0.3, 0.7, a_begin, a_end, 16);
+  c.comoving.cosmology.hubble_param = hubble_param;
   c.integration.dt_min = 1e-14;
-  c.integration.dt_max = 1.0;
-  c.integration.max_dln_a = 0.01;
-  c.space.periodic = true;
-  c.space.box_size = {box, box, box};
-  c.gravity.enabled = true;
-  c.gravity.mesh_cells = 16;
-  c.gravity.G = Units().gravitational_constant();
   c.gravity.softening_gas = 0.05 * box / 8.0;
   return c;
 }

@@ -19,22 +19,12 @@ namespace fountain {
 
 namespace {
 
-// H0 in a file's units: 100 km/s per Mpc/h in h-scaled units, whatever h is.
-double hubble0_in(const Units& u) {
-  const Units mpc_msun_kms;
-  return cosmology::kHubbleInternal * (u.length_cgs / mpc_msun_kms.length_cgs) / (u.velocity_cgs / mpc_msun_kms.velocity_cgs);
-}
-
 std::unique_ptr<tbb::global_control> limit_threads(int threads) {
   if (threads <= 0) return nullptr;
   return std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                static_cast<std::size_t>(threads));
 }
 
-double critical_density(const Units& u) {
-  const double h0 = hubble0_in(u);
-  return 3.0 * h0 * h0 / (8.0 * std::numbers::pi * u.gravitational_constant());
-}
 
 }  // namespace
 
@@ -60,7 +50,7 @@ std::string find_hop_groups(const HopRequest& request) {
                                  "{}; give --omega-b",
                                  request.snapshot, in.cosmological ? "has no OmegaBaryon" : "is not cosmological"));
   groups::HopParameters p;
-  const double mean = omega_b * critical_density(in.units);
+  const double mean = omega_b * cosmology::critical_density0_in(in.units);
   p.n_dens = request.n_dens;
   p.n_hop = request.n_hop;
   p.n_merge = request.n_merge;
@@ -91,7 +81,7 @@ std::string find_groups(const FofRequest& request) {
   // The mean density the primaries stand for: all matter but the baryons (COSMOLOGY.md C9.1),
   // or all matter when the snapshot has no gas or stars.
   const double G = in.units.gravitational_constant();
-  const double rho_crit0 = critical_density(in.units);
+  const double rho_crit0 = cosmology::critical_density0_in(in.units);
   double primary_mass = 0.0, gas_mass = 0.0, dm_mass = 0.0;
   std::size_t primaries = 0, baryons = 0, gas = 0, dm = 0;
   for (std::size_t i = 0; i < set.size(); ++i) {

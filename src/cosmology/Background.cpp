@@ -6,6 +6,7 @@
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <boost/numeric/odeint.hpp>
 #include <cmath>
+#include <numbers>
 
 #include "core/Error.hpp"
 
@@ -92,6 +93,16 @@ double initial_gas_temperature(const CosmologyParams& c, double a) {
   const double omega_b_h2 = c.omega_b * c.hubble_param * c.hubble_param;
   const double a_dec = 1.0 / (160.0 * std::pow(omega_b_h2 / 0.022, 0.4));
   return a < a_dec ? kCmbTemperature / a : kCmbTemperature * a_dec / (a * a);
+}
+
+double hubble0_in(const Units& units) {
+  const Units mpc_msun_kms;  // the defaults
+  return kHubbleInternal * (units.length_cgs / mpc_msun_kms.length_cgs) / (units.velocity_cgs / mpc_msun_kms.velocity_cgs);
+}
+
+double critical_density0_in(const Units& units) {
+  const double h0 = hubble0_in(units);
+  return 3.0 * h0 * h0 / (8.0 * std::numbers::pi * units.gravitational_constant());
 }
 
 }  // namespace fountain::cosmology

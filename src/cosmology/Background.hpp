@@ -1,5 +1,6 @@
 // The expanding background of a comoving run: E(a), cosmic time, and linear growth to second order.
 #pragma once
+#include "core/Units.hpp"
 
 namespace fountain::cosmology {
 
@@ -16,6 +17,10 @@ struct CosmologyParams {
 // Internal units are h-scaled (Mpc/h, Msun/h, km/s), so H0 = 100 per internal time unit
 // whatever h is.
 inline constexpr double kHubbleInternal = 100.0;
+// H0 = 100 km/s per Mpc/h in a unit system given in cgs without h (exactly kHubbleInternal
+// in the default Mpc/h, Msun/h, km/s), and the critical density 3 H0^2 / (8 pi G) there.
+double hubble0_in(const Units& units);
+double critical_density0_in(const Units& units);
 
 // The CMB's temperature today (K), as Eisenstein & Hu's transfer function takes it.
 inline constexpr double kCmbTemperature = 2.728;

@@ -105,10 +105,7 @@ void Engine::setup_comoving() {
   if (!config_.gravity.enabled) throw InputError("a comoving run needs gravity (gravity.enabled: true)");
   if (!config_.space.periodic) throw InputError("a comoving run needs a periodic box (initial_conditions.periodic: true)");
   // H0 = 100 km/s/Mpc in the run's units: exactly 100 in the default h-scaled units.
-  const Units mpc_msun_kms;  // the defaults
-  const double hubble0 = cosmology::kHubbleInternal * (config_.units.length_cgs / mpc_msun_kms.length_cgs) /
-                         (config_.units.velocity_cgs / mpc_msun_kms.velocity_cgs);
-  background_ = std::make_unique<cosmology::Background>(c.cosmology, hubble0);
+  background_ = std::make_unique<cosmology::Background>(c.cosmology, cosmology::hubble0_in(config_.units));
   expansion_factors_ = std::make_unique<cosmology::IntegrationFactors>(*background_, config_.hydro.gamma, c.a_begin, c.a_end);
   comoving_ = std::make_unique<ComovingTimeLine>(*expansion_factors_);
   timeline_.t_begin = std::log(c.a_begin);
