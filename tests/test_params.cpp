@@ -103,21 +103,22 @@ TEST(Parameters, DissolvingBeforeSpawningIsRefused) {
   EXPECT_NE(msg.find("star_formation.dissolve_fraction"), std::string::npos) << msg;
 }
 
-// The floor of h is a multiple of the gas softening (half the dark matter's when unset), as
-// GADGET-1 sets it; without a softening it has nothing to be a multiple of.
+// The floor of h is a multiple of the gas's spline softening length, 2.8 times its Plummer-
+// equivalent softening (half the dark matter's when unset), as GADGET's MinGasHsmlFractional
+// is; without a softening it has nothing to be a multiple of.
 TEST(Parameters, SmoothingLengthFloorFollowsTheGasSoftening) {
   const std::string base = std::string(kMinimal) + "hydro:\n  h_min_ratio: 0.5\n";
   const auto from_dm = RunConfig::from(ParameterFile::parse(base + "gravity:\n  softening_dark_matter: 0.002\n", "p"));
-  EXPECT_DOUBLE_EQ(from_dm.hydro.h_min, 0.5 * 0.001);
+  EXPECT_DOUBLE_EQ(from_dm.hydro.h_min, 0.5 * 2.8 * 0.001);
   const auto from_gas = RunConfig::from(
       ParameterFile::parse(base + "gravity:\n  softening_dark_matter: 0.002\n  softening_gas: 0.003\n", "p"));
-  EXPECT_DOUBLE_EQ(from_gas.hydro.h_min, 0.5 * 0.003);
+  EXPECT_DOUBLE_EQ(from_gas.hydro.h_min, 0.5 * 2.8 * 0.003);
   EXPECT_EQ(RunConfig::from(ParameterFile::parse(kMinimal, "p")).hydro.h_min, 0.0);
   const auto msg = config_error_of(base);
   EXPECT_NE(msg.find("hydro.h_min_ratio"), std::string::npos) << msg;
   EXPECT_NE(msg.find("params.yml"), std::string::npos) << msg;
   const auto above_max = config_error_of(std::string(kMinimal) +
-                                         "hydro:\n  h_min_ratio: 2\n  h_max: 0.001\n"
+                                         "hydro:\n  h_min_ratio: 0.5\n  h_max: 0.001\n"
                                          "gravity:\n  softening_gas: 0.001\n");
   EXPECT_NE(above_max.find("hydro.h_max"), std::string::npos) << above_max;
 }

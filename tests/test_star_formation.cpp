@@ -361,7 +361,8 @@ TEST(Feedback, WithoutColdAndHotSharesItIsPureThermalFeedback) {
 // A cold clump (1e-24 g cm^-3, 1e4 K) in hot gas (1e-26 g cm^-3, T_hot) in a periodic box,
 // everything at rest but the clump's central particle, which holds hidden stars and a
 // reservoir worth `target_k` kelvin. Star formation is on with zero efficiency, so only the
-// reservoir acts. Returns the engine after its first (t = 0) step and the particle's id.
+// reservoir acts; h_min > 0 sets a floor of h. Returns the engine after its first (t = 0) step
+// and the particle's id.
 struct PromotionCase {
   std::unique_ptr<Engine> engine;
   std::uint64_t id = 0;
@@ -369,7 +370,7 @@ struct PromotionCase {
   Vec3 momentum_before;
 };
 
-PromotionCase promotion_case(double t_hot, double target_k) {
+PromotionCase promotion_case(double t_hot, double target_k, double h_min = 0.0) {
   const Units units = kpc_units();
   RunConfig c = sf_config();
   c.space.periodic = true;
@@ -377,6 +378,7 @@ PromotionCase promotion_case(double t_hot, double target_k) {
   c.star_formation.efficiency = 0.0;
   c.feedback.energy_per_solar_mass_erg = 4e48;
   c.feedback.eps_cold = 0.5;
+  c.hydro.h_min = h_min;
   constexpr double radius = 3.0;
   GasParticles g;
   auto add = [&](const Vec3& x, double m, double u) {
@@ -438,8 +440,9 @@ TEST(Promotion, ThresholdIsFiftyTStarUnlessTheHotNeighboursAreHotterThanThat) {
   }
 }
 
-TEST(Promotion, PromotedParticleSeesNoColdNeighboursAndHandsThemItsStars) {
-  const PromotionCase pc = promotion_case(3e6, 6.5e6);
+// The promoted particle's density is that of itself and its non-cold neighbours within its h,
+// which holds N_ngb of them, or more when the floor h_min sets h; its stars went to the cold.
+void expect_promoted_into_the_hot_phase(const PromotionCase& pc, double h_min) {
   const Engine& e = *pc.engine;
   const GasParticles& g = e.gas();
   const std::size_t i = index_of(g, pc.id);
@@ -474,12 +477,31 @@ TEST(Promotion, PromotedParticleSeesNoColdNeighboursAndHandsThemItsStars) {
     }
   }
   EXPECT_GT(cold_neighbours, 10) << "cold neighbours holding its stars";
-  EXPECT_NEAR(kernel::volume_factor * std::pow(g.h[i], 3) * w_sum, 32.0, 1e-6) << "hot neighbour number";
+  const double hot_neighbours = kernel::volume_factor * std::pow(g.h[i], 3) * w_sum;
+  if (h_min > 0.0) {
+    EXPECT_EQ(g.h[i], h_min) << "held at the floor";
+    EXPECT_GT(hot_neighbours, 32.0 + 1.0) << "more hot neighbours within the floor's kernel";
+  } else {
+    EXPECT_NEAR(hot_neighbours, 32.0, 1e-6) << "hot neighbour number";
+  }
   EXPECT_NEAR(g.rho[i], rho, 1e-12 * rho);
   EXPECT_LT(g.rho[i], 0.1 * 1e-24 / units.density_cgs()) << "density still that of the clump";
   EXPECT_EQ(g.mass_stars_hidden[i], 0.0);
   EXPECT_NEAR(hidden_elsewhere, pc.hidden, 1e-12 * pc.hidden);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(momentum[k], pc.momentum_before[k], 1e-9 * norm(pc.momentum_before));
+}
+
+TEST(Promotion, PromotedParticleSeesNoColdNeighboursAndHandsThemItsStars) {
+  expect_promoted_into_the_hot_phase(promotion_case(3e6, 6.5e6), 0.0);
+}
+
+// GADGET's floor of h binds the promoted particle too: solved over its hot neighbours alone its h
+// would fall below the floor every other particle keeps to.
+TEST(Promotion, PromotedParticleKeepsToTheFloorOfH) {
+  const PromotionCase free_case = promotion_case(3e6, 6.5e6);
+  const double h_hot = free_case.engine->gas().h[index_of(free_case.engine->gas(), free_case.id)];
+  const double h_min = 1.5 * h_hot;
+  expect_promoted_into_the_hot_phase(promotion_case(3e6, 6.5e6, h_min), h_min);
 }
 
 // ---- Reproducibility -----------------------------------------------------------------------

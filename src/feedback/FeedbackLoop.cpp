@@ -131,9 +131,18 @@ void promote(StepContext& ctx, FeedbackState& fb, std::size_t i) {
     const double mid = 0.5 * (lo + hi);
     (weighted_count(mid) < n_ngb ? lo : hi) = mid;
   }
-  const double h = hi, h_inv = 1.0 / h;
+  // The floor of h holds here as in the ghost: a promoted particle among close hot neighbours
+  // would otherwise take a kernel, and a Courant step, far below every other particle's.
+  const double h = std::max(hi, ctx.hydro.h_min), h_inv = 1.0 / h;
   double rho = gas.mass[i] * kernel::value(0.0, h_inv);
-  for (std::size_t n = 0; n < hot.size(); ++n) rho += gas.mass[hot[n]] * kernel::value(r[n], h_inv);
+  if (h <= r.back()) {
+    for (std::size_t n = 0; n < hot.size(); ++n) rho += gas.mass[hot[n]] * kernel::value(r[n], h_inv);
+  } else {
+    // The floor reaches past the nearest 4 N_ngb: every non-cold particle within it counts.
+    for_each_within(ctx.space, gas, gas.x[i], h, [&](std::size_t j, const Vec3&, double rj) {
+      if (j != i && gas.mass[j] > 0.0 && !fb.is_cold(ctx, j)) rho += gas.mass[j] * kernel::value(rj, h_inv);
+    });
+  }
   gas.h[i] = h;
   gas.h_msph[i] = h;
   gas.rho[i] = rho;

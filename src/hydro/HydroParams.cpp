@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include "core/Error.hpp"
+#include "gravity/GravityKernel.hpp"
 #include "params/ParameterFile.hpp"
 
 namespace fountain {
@@ -30,9 +31,11 @@ HydroParams HydroParams::from(const ParameterFile& p) {
       throw InputError(fmt::format("{}: key 'hydro.h_min_ratio' = {} needs a gas softening, but neither "
                                    "'gravity.softening_gas' nor 'gravity.softening_dark_matter' is set",
                                    p.origin(), ratio));
-    h.h_min = ratio * eps_gas;
+    // GADGET's MinGasHsmlFractional counts in the gas's spline softening length (where its force
+    // turns Newtonian), not in the Plummer-equivalent epsilon the parameter file quotes.
+    h.h_min = ratio * gravity::spline_length(eps_gas);
     if (h.h_max > 0.0 && h.h_min > h.h_max)
-      throw InputError(fmt::format("{}: the smallest smoothing length hydro.h_min_ratio x softening = {} exceeds "
+      throw InputError(fmt::format("{}: the smallest smoothing length hydro.h_min_ratio x 2.8 x softening = {} exceeds "
                                    "'hydro.h_max' = {}",
                                    p.origin(), h.h_min, h.h_max));
   }

@@ -135,7 +135,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       real("hydro.msph_A_prime", "10", 1, inf, "Energy-contrast threshold A' of the MSPH rule."),
       real("hydro.h_max", "0", 0, inf, "Largest smoothing length allowed; 0 means no limit."),
       real("hydro.h_min_ratio", "0", 0, inf,
-           "Smallest smoothing length as a multiple of the gas's Plummer-equivalent softening (GADGET-1's "
+           "Smallest smoothing length as a multiple of the gas's spline softening length 2.8 eps_gas (GADGET's "
            "MinGasHsmlFractional); a particle that would need less keeps this h and more neighbours. 0: no floor."),
       integer("hydro.max_h_iterations", "50", 1, 1000, "Iterations of the smoothing-length solver before the run stops with an error."),
       // gravity
