@@ -8,10 +8,10 @@
 set -eu
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${BENCH_BIN:-$root/build/benchmarks/fountain_sphere_bench}
-ic=${COLLAPSED_SNAPSHOT:-$root/examples/rotating_sphere/output/8000_msph/snapshot_0008.hdf5}
+ic=${COLLAPSED_SNAPSHOT:-$root/examples/rotating_sphere/output/fountain/8000_msph/snapshot_0008.hdf5}
 out=${OUT:-$root/benchmarks/results/efficiency}
 pairs=${PAIRS:-8}
-[ -f "$ic" ] || { echo "no $ic: run examples/rotating_sphere/run_convergence.sh first" >&2; exit 1; }
+[ -f "$ic" ] || { echo "no $ic: run MODE=fountain SIZES=8000 sh examples/rotating_sphere/run_convergence.sh first" >&2; exit 1; }
 mkdir -p "$out"
 rm -f "$out"/pair_*.json
 k=1

@@ -19,14 +19,14 @@ if [ -z "${PROBLEMS:-}" ] || echo "$PROBLEMS" | grep -q sphere; then
   done
   # The collapsed sphere, where the study spends its time: 3e-6 (3 Myr, ~1000 steps) from the
   # 8000-per-species MSPH run's snapshot at 0.98 Gyr, when the convergence study has made it.
-  collapsed=${COLLAPSED_SNAPSHOT:-$root/examples/rotating_sphere/output/8000_msph/snapshot_0008.hdf5}
+  collapsed=${COLLAPSED_SNAPSHOT:-$root/examples/rotating_sphere/output/fountain/8000_msph/snapshot_0008.hdf5}
   if [ -f "$collapsed" ]; then
     for t in 1 2; do
       "$root/build/benchmarks/fountain_sphere_bench" --ic "$collapsed" --threads "$t" --t-end 3e-6 \
         --json "$out/sphere_collapsed_t$t.json" 2>/dev/null
     done
   else
-    echo "skipping the collapsed sphere: no $collapsed (run examples/rotating_sphere/run_convergence.sh)"
+    echo "skipping the collapsed sphere: no $collapsed (run MODE=fountain SIZES=8000 sh examples/rotating_sphere/run_convergence.sh)"
   fi
 fi
 "$root/build/benchmarks/fountain_bench_kernels" --benchmark_format=json > "$out/kernels.json"

@@ -7,17 +7,17 @@
 #   sh examples/rotating_sphere/run_convergence.sh            # all six runs, then the plots
 #   SIZES="2000" SCHEMES="msph" THREADS=1 sh examples/rotating_sphere/run_convergence.sh
 #   JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # two runs at a time
-#   MODE=paper JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # the paper's settings
+#   MODE=fountain JOBS=2 THREADS=1 sh examples/rotating_sphere/run_convergence.sh   # Fountain's settings
 #
 # With JOBS > 1, that many runs go at once (largest first, each taking the next run left when
 # it finishes; the last run goes on with all the workers' threads once the others are idle):
 # on 2 cores, two 1-thread runs side by side finish the study sooner than one 2-thread run
 # after another, as a single run's second thread idles in its serial parts.
-# MODE: default (Fountain's settings) or paper (the paper's: no timestep limiter, dt_min 1e-8,
-# a floor of h; run_or_resume.sh says which values). Runs go to
-# examples/rotating_sphere/output/<N>_<scheme>/ (MODE=paper: output/paper/<N>_<scheme>/;
-# $OUTPUT/<N>_<scheme>/ if set) and the figures to docs/validation/ (MODE=paper:
-# docs/validation/paper/; $DOCS if set); a finished run is not redone.
+# MODE: paper (the default: the paper's settings, no timestep limiter, dt_min 1e-8, a floor of
+# h) or fountain (Fountain's defaults); run_or_resume.sh says which values. Runs go to
+# examples/rotating_sphere/output/<N>_<scheme>/ (MODE=fountain: output/fountain/<N>_<scheme>/;
+# $OUTPUT/<N>_<scheme>/ if set) and the figures to docs/validation/ (MODE=fountain:
+# docs/validation/fountain/; $DOCS if set); a finished run is not redone.
 # Internal units are the paper's (Mpc/h, Msun/h, km/s) with h = 1 for the cooling rates;
 # the time unit is 977.8 Gyr, so 1.2 Gyr is t = 1.227e-3.
 set -eu
@@ -28,13 +28,8 @@ root=$(cd "$here/../.." && pwd)
 bin=${FOUNTAIN_BIN:-$root/build/fountain}
 [ -x "$bin" ] || sh "$root/scripts/build.sh"
 set_mode
-if [ "$mode" = paper ]; then
-  out=${OUTPUT:-$here/output/paper}
-  docs=${DOCS:-$root/docs/validation/paper}
-else
-  out=${OUTPUT:-$here/output}
-  docs=${DOCS:-$root/docs/validation}
-fi
+out=${OUTPUT:-$out_root}
+if [ "$mode" = paper ]; then docs=${DOCS:-$root/docs/validation}; else docs=${DOCS:-$root/docs/validation/fountain}; fi
 mkdir -p "$out"
 threads=${THREADS:-2}
 jobs=${JOBS:-1}
@@ -47,7 +42,7 @@ for n in ${SIZES:-2000 4000 8000}; do
     *) eps=${SOFTENING:?set SOFTENING (Mpc/h) for N = $n} ;;
   esac
   ic="$out/sphere_$n.hdf5"
-  [ -f "$ic" ] || "$bin" ic sphere -n "$n" -o "$ic"
+  make_sphere_ic "$ic" -n "$n"
   for scheme in ${SCHEMES:-sph msph}; do
     dir="$out/${n}_$scheme"
     runs="$runs ${n}_$scheme"

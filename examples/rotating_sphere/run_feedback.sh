@@ -9,13 +9,14 @@
 #
 #   sh examples/rotating_sphere/run_feedback.sh                     # all, then the plots
 #   RUNS="R02 R04" N=2000 T_END=0.6 sh examples/rotating_sphere/run_feedback.sh
-#   MODE=paper sh examples/rotating_sphere/run_feedback.sh          # the paper's settings
+#   MODE=fountain sh examples/rotating_sphere/run_feedback.sh       # Fountain's settings
 #
 # N: particles per species (default 4000; the softening is scaled as N^(-1/3) from 1.5 kpc/h
 # at 4000). T_END: Gyr (default 2, h = 1). THREADS: default 2. Runs go to
-# $OUT/<run>/ (default examples/rotating_sphere/output/feedback_<N>, with MODE=paper
-# output/paper/feedback_<N>); a finished run is not redone (delete its folder to redo it), a
-# killed one continues from its restart file. MODE: default or paper (run_or_resume.sh).
+# $OUT/<run>/ (default examples/rotating_sphere/output/feedback_<N>, with MODE=fountain
+# output/fountain/feedback_<N>); a finished run is not redone (delete its folder to redo it), a
+# killed one continues from its restart file. MODE: paper (the default) or fountain
+# (run_or_resume.sh). Scripts may run side by side on different RUNS of one OUT.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
 . "$here/run_or_resume.sh"
@@ -28,7 +29,7 @@ n=${N:-4000}
 t_end_gyr=${T_END:-2}
 threads=${THREADS:-2}
 set_mode
-if [ "$mode" = paper ]; then out=${OUT:-$here/output/paper/feedback_$n}; else out=${OUT:-$here/output/feedback_$n}; fi
+out=${OUT:-$out_root/feedback_$n}
 mkdir -p "$out"
 py=/usr/bin/python3
 # Internal time unit: Mpc/(km/s) = 977.8 Gyr (h = 1).
@@ -54,7 +55,7 @@ for run in ${RUNS:-R01 R02 R03 R04 R05 G09 G10 G11}; do
   radius=$($py -c "print(0.1 * $scale)")
   eps=$($py -c "print(f'{0.0015 * $scale * (4000 / $n) ** (1 / 3):.6g}')")
   ic="$out/sphere_${mass}.hdf5"
-  [ -f "$ic" ] || "$bin" ic sphere -n "$n" --mass "$mass" --radius "$radius" -o "$ic"
+  make_sphere_ic "$ic" -n "$n" --mass "$mass" --radius "$radius"
   dir="$out/$run"
   [ -f "$dir/done" ] && continue
   mkdir -p "$dir"
@@ -92,6 +93,8 @@ EOT
   run_or_resume "$dir"
 done
 
+# PLOTS=0: runs only (scripts running side by side leave the figures to one last call).
+[ "${PLOTS:-1}" = 1 ] || exit 0
 plot() {  # plot NAME [--warm-and-hot] RUN...
   name=$1; shift
   extra=""

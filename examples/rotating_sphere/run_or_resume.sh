@@ -37,19 +37,30 @@ run_or_resume() {
 
 # MODE selects the numerical settings of the sphere runs (sets $mode, $dt_min, $limiter,
 # $h_min_ratio):
-#   default: Fountain's defaults: the timestep limiter on (it also wakes the neighbours of
+#   paper (the default of the scripts that reproduce the paper's figures): Marri & White (2003)
+#            section 3.1: no limiter, dt in [1e-8, 1e-6] (a particle that needs less stops the
+#            run, as GADGET does), and the floor of the smoothing length GADGET offers
+#            (MinGasHsmlFractional), H_MIN_RATIO times the gas's spline softening length
+#            2.8 eps_gas (default 1; 0: no floor; docs/validation.md, "Rotating sphere in the
+#            paper's settings", says which floors reach dt_min).
+#   fountain: Fountain's defaults: the timestep limiter on (it also wakes the neighbours of
 #            particles that feedback heats), no floor of h, and dt_min lowered to 1e-13 so
 #            that the dense knots of the cold disc never stop a run.
-#   paper:   Marri & White (2003) section 3.1: no limiter, dt in [1e-8, 1e-6] (a particle
-#            that needs less stops the run, as GADGET does), and the floor of the smoothing
-#            length GADGET-1 offers, H_MIN_RATIO times the gas softening (default 1; 0: no
-#            floor). At 8000 particles per species the runs still reach dt_min
-#            (docs/validation.md, "Rotating sphere in the paper's settings").
+# out_root: where the mode's runs go (examples/rotating_sphere/output, or its fountain/).
 set_mode() {
-  mode=${MODE:-default}
+  mode=${MODE:-paper}
   case $mode in
-    default) dt_min=1.0e-13 limiter=true h_min_ratio=0 ;;
-    paper) dt_min=1.0e-8 limiter=false h_min_ratio=${H_MIN_RATIO:-1} ;;
-    *) echo "unknown MODE $mode (default or paper)" >&2; exit 2 ;;
+    paper) dt_min=1.0e-8 limiter=false h_min_ratio=${H_MIN_RATIO:-1} out_root=$here/output ;;
+    fountain) dt_min=1.0e-13 limiter=true h_min_ratio=0 out_root=$here/output/fountain ;;
+    *) echo "unknown MODE $mode (paper or fountain)" >&2; exit 2 ;;
   esac
+}
+
+# make_sphere_ic FILE ARGS...: the rotating sphere's initial conditions, written once; written
+# to a temporary name and moved, so that scripts running side by side never read half a file.
+make_sphere_ic() {
+  ic_file=$1; shift
+  [ -f "$ic_file" ] && return 0
+  "$bin" ic sphere "$@" -o "$ic_file.$$.tmp"
+  mv -f "$ic_file.$$.tmp" "$ic_file"
 }
