@@ -15,7 +15,7 @@ constexpr const char* kColumns =
     "thermal_energy kinetic_energy potential_energy total_energy radiated_energy "
     "momentum_x momentum_y momentum_z angular_momentum_x angular_momentum_y angular_momentum_z "
     "mass_stars mass_stars_hidden sfr_msun_per_yr mass_promoted_diffuse reservoir_energy "
-    "feedback_own feedback_reservoir feedback_hot thermal_locked h_min_gas dt_min";
+    "feedback_own feedback_reservoir feedback_hot thermal_locked h_min_gas dt_min promotions";
 }
 
 StatisticsFile::StatisticsFile(const std::string& path, bool append, bool comoving) : path_(path) {
@@ -29,7 +29,8 @@ StatisticsFile::StatisticsFile(const std::string& path, bool append, bool comovi
                "gas promoted by feedback and not cold now. Conserved: total_energy + reservoir_energy + "
                "radiated_energy + thermal_locked - feedback_own - feedback_reservoir - feedback_hot (all since "
                "the start; thermal_locked is the thermal energy of gas turned into stars). h_min_gas: the smallest gas "
-               "smoothing length; dt_min: the smallest particle timestep, both at the line's time.\n");
+               "smoothing length; dt_min: the smallest particle timestep, both at the line's time. promotions: feedback's "
+               "promotions of gas into the hot phase since the start (a particle promoted twice counts twice).\n");
     if (comoving)
       fmt::print(file_,
                  "# A comoving run: time is the scale factor a; every quantity is physical (rho'/a^3, u'/a^2, a h'), "
@@ -53,6 +54,7 @@ void StatisticsFile::write(double time, long long step, const analysis::Diagnost
                    d.sfr_msun_per_yr, d.mass_promoted_diffuse, d.reservoir, d.feedback_own, d.feedback_reservoir,
                    d.feedback_hot, d.thermal_locked, d.h_min_gas, d.dt_min})
     line += fmt::format(" {:.10e}", x);
+  line += fmt::format(" {}", d.promotions);
   line += '\n';
   const bool ok = std::fputs(line.c_str(), file_) >= 0;
   if (!ok || std::fflush(file_) != 0)

@@ -35,6 +35,8 @@ struct Diagnostics {
   double sfr_msun_per_yr = 0.0;      // mean since the previous line
   double feedback_own = 0.0, feedback_reservoir = 0.0, feedback_hot = 0.0;  // injected, since the start
   double thermal_locked = 0.0;       // thermal energy of gas turned into stars, since the start
+  long long promotions = 0;          // into the hot phase, since the start: with mass_promoted_diffuse
+                                     // it tells how long promoted gas stays out of the cold phase
   // Resolution now: the smallest gas smoothing length, and the smallest time bin of any
   // particle with the step it stands for (the latter filled in by the caller, who has the
   // timeline): how close a run is to its floors of h and dt.

@@ -132,6 +132,7 @@ void StatisticsSeries::write() {
   d.feedback_reservoir = sf.energy_reservoir;
   d.feedback_hot = sf.energy_hot;
   d.thermal_locked = sf.thermal_locked;
+  d.promotions = sf.promotions;
   d.dt_min = engine_.cosmic_step(d.time_bin_min);
   file_->write(config_.comoving.enabled ? engine_.scale_factor() : engine_.time(), engine_.steps(), d);
 }
