@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
-"""Figures like Marri & White (2003) Figs 1-3 from the runs of run_convergence.sh, and the
-table of gas phases at the last output (about 1.2 Gyr).
+"""Figures like Marri & White (2003) Figs 1-3 from the runs of run_convergence.sh, the table
+of gas phases at the last output (about 1.2 Gyr), and the table of where the hot gas lies
+about the disc (sphere_hot_halo_table.md): hot particles within 5, 10, 15 and 20 kpc/h of the
+cold gas's centre of mass at the last output, and the hot particles' number density in shells
+about that centre, averaged over the last three outputs (the paper's Fig 3 shows MSPH's hot gas
+peaked at the centre and SPH's with a hole there).
 
     /usr/bin/python3 examples/rotating_sphere/plot_convergence.py examples/rotating_sphere/output \
         [--docs docs/validation]
@@ -50,6 +54,29 @@ def runs(folder):
 def last_snapshot(run):
     snaps = sorted(glob.glob(os.path.join(run, "snapshot_*.hdf5")))
     return snaps[-1] if snaps else None
+
+
+SHELLS_KPC = (0, 4, 8, 12, 16, 20, 30)
+
+
+def hot_halo(run):
+    """Hot particles about the cold gas's centre: counts within 5/10/15/20 kpc/h and the hot
+    mass within 15 kpc/h (fraction of the gas) at the last output; number density per 1000
+    (kpc/h)^3 in SHELLS_KPC, averaged over the last three outputs."""
+    snaps = sorted(glob.glob(os.path.join(run, "snapshot_*.hdf5")))[-3:]
+    density = np.zeros(len(SHELLS_KPC) - 1)
+    for path in snaps:
+        x, rho, temp, m, t = gas_state(path)
+        hot = temp > 2 * T_STAR
+        cold = ~hot & (rho > 0.1 * RHO_STAR_CGS)
+        centre = np.average(x[cold], axis=0, weights=m[cold]) if cold.any() else np.zeros(3)
+        r = np.linalg.norm(x - centre, axis=1) * 1e3
+        counts, _ = np.histogram(r[hot], bins=SHELLS_KPC)
+        volume = 4.0 / 3.0 * np.pi * np.diff(np.power(SHELLS_KPC, 3))
+        density += 1e3 * counts / volume / len(snaps)
+    within = [int(np.sum(hot & (r < R))) for R in (5, 10, 15, 20)]
+    hot_mass_15 = float(np.sum(m[hot & (r < 15)]) / np.sum(m))
+    return within, hot_mass_15, density, [gas_state(p)[4] for p in snaps]
 
 
 def gas_state(path):
@@ -116,6 +143,25 @@ def main():
     with open(os.path.join(out, "sphere_phases_table.md"), "w") as f:
         f.write(table)
     print(table)
+
+    # Where the hot gas lies about the disc, every run.
+    rows = ["| run | hot within 5 / 10 / 15 / 20 kpc/h | hot mass within 15 kpc/h (of the gas) | "
+            + " | ".join(f"{a}-{b}" for a, b in zip(SHELLS_KPC[:-1], SHELLS_KPC[1:])) + " |",
+            "|---|---|---|" + "---|" * (len(SHELLS_KPC) - 1)]
+    times = None
+    for (n, scheme), run in sorted(found.items()):
+        if last_snapshot(run) is None:
+            continue
+        within, hot15, density, times = hot_halo(run)
+        rows.append(f"| {scheme.upper()} {n} | {' / '.join(str(w) for w in within)} | {hot15:.4f} | "
+                    + " | ".join(f"{d:.2f}" for d in density) + " |")
+    if times is not None:
+        halo = ("Hot particles about the cold gas's centre of mass: counts at the last output; number density "
+                "of hot particles per 1000 (kpc/h)^3 in shells (kpc/h), averaged over the outputs at "
+                + ", ".join(f"{t:.2f}" for t in times) + " Gyr.\n\n" + "\n".join(rows) + "\n")
+        with open(os.path.join(out, "sphere_hot_halo_table.md"), "w") as f:
+            f.write(halo)
+        print(halo)
 
     # Figs 2 and 3 at the largest resolution with both schemes.
     both = [n for n in sizes if (n, "sph") in found and (n, "msph") in found]
