@@ -54,7 +54,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.gravity.softening_dark_matter = spacing / 25.0;  // comoving, a usual choice
   c.gravity.softening_gas = 0.5 * c.gravity.softening_dark_matter;
   const std::size_t n = ic.gas.size() + ic.dark_matter.size();
-  Engine e(c, std::move(ic.gas), std::move(ic.dark_matter));
+  Engine e(c, to_run_particles(std::move(ic.gas)), to_run_particles(std::move(ic.dark_matter)));
   e.initialise();
   e.set_record_timeline(true);
   const double setup = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

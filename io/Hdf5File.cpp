@@ -418,16 +418,21 @@ void File::create_group(const std::string& group) {
   if (!g.valid()) fail(group, "cannot create group");
 }
 
+Id File::create_dataset(const std::string& dataset, hid_t file_type, const std::vector<hsize_t>& dims) {
+  Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  if (!space.valid()) fail(dataset, "cannot create dataspace");
+  Id lcpl = intermediate_groups_lcpl();
+  Id ds(H5Dcreate2(file_.get(), dataset.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
+        H5Dclose);
+  if (!ds.valid()) fail(dataset, "cannot create dataset");
+  return ds;
+}
+
 void File::write_numeric_dataset(const std::string& dataset, hid_t file_type, hid_t memory_type,
                                  const std::vector<hsize_t>& dims, const void* data,
                                  const StringAttributes& attributes) {
   {
-    Id space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
-    if (!space.valid()) fail(dataset, "cannot create dataspace");
-    Id lcpl = intermediate_groups_lcpl();
-    Id ds(H5Dcreate2(file_.get(), dataset.c_str(), file_type, space.get(), lcpl.get(), H5P_DEFAULT, H5P_DEFAULT),
-          H5Dclose);
-    if (!ds.valid()) fail(dataset, "cannot create dataset");
+    Id ds = create_dataset(dataset, file_type, dims);
     const bool empty = std::any_of(dims.begin(), dims.end(), [](hsize_t d) { return d == 0; });
     if (!empty && H5Dwrite(ds.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0)
       fail(dataset, "cannot write data (disk full?)");
@@ -436,19 +441,53 @@ void File::write_numeric_dataset(const std::string& dataset, hid_t file_type, hi
   for (const auto& [name, value] : attributes) write_attribute(dataset, name, value);
 }
 
-void File::write_dataset(const std::string& dataset, const std::vector<double>& values,
+void File::write_dataset(const std::string& dataset, std::span<const double> values,
                          const StringAttributes& attributes) {
   write_numeric_dataset(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {values.size()}, values.data(), attributes);
 }
 
-void File::write_dataset(const std::string& dataset, const std::vector<Vec3>& values,
+void File::write_dataset(const std::string& dataset, std::span<const Vec3> values,
                          const StringAttributes& attributes) {
   write_numeric_dataset(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, {values.size(), 3}, values.data(), attributes);
 }
 
-void File::write_dataset(const std::string& dataset, const std::vector<std::uint64_t>& values,
+void File::write_dataset(const std::string& dataset, std::span<const std::uint64_t> values,
                          const StringAttributes& attributes) {
   write_numeric_dataset(dataset, H5T_STD_U64LE, H5T_NATIVE_UINT64, {values.size()}, values.data(), attributes);
+}
+
+template <class T>
+void File::write_pieces(const std::string& dataset, hid_t file_type, hid_t memory_type, std::size_t rows,
+                        std::size_t columns, const std::function<void(std::size_t, std::span<T>)>& fill) {
+  // 2^16 rows a piece: a few MB of buffer, and a write call per piece costs nothing beside it.
+  constexpr std::size_t kPieceRows = std::size_t{1} << 16;
+  const int rank = columns == 1 ? 1 : 2;
+  Id ds = create_dataset(dataset, file_type, rank == 1 ? std::vector<hsize_t>{rows} : std::vector<hsize_t>{rows, columns});
+  std::vector<T> buffer(std::min(rows, kPieceRows) * columns);
+  for (std::size_t first = 0; first < rows; first += kPieceRows) {
+    const std::size_t count = std::min(kPieceRows, rows - first);
+    const std::span<T> out(buffer.data(), count * columns);
+    fill(first, out);
+    const hsize_t start[2] = {first, 0}, size[2] = {count, columns};
+    const hsize_t elements = out.size();
+    Id file_space(H5Dget_space(ds.get()), H5Sclose);
+    Id memory_space(H5Screate_simple(1, &elements, nullptr), H5Sclose);
+    if (!file_space.valid() || !memory_space.valid() ||
+        H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, size, nullptr) < 0)
+      fail(dataset, "cannot select rows to write");
+    if (H5Dwrite(ds.get(), memory_type, memory_space.get(), file_space.get(), H5P_DEFAULT, buffer.data()) < 0)
+      fail(dataset, "cannot write data (disk full?)");
+  }
+  if (ds.close() < 0) fail(dataset, "cannot close dataset (disk full?)");
+}
+
+void File::write_dataset_in_pieces(const std::string& dataset, std::size_t rows, std::size_t columns,
+                                   const DoublePieceFill& fill) {
+  write_pieces<double>(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, rows, columns, fill);
+}
+
+void File::write_dataset_in_pieces(const std::string& dataset, std::size_t rows, const IdPieceFill& fill) {
+  write_pieces<std::uint64_t>(dataset, H5T_STD_U64LE, H5T_NATIVE_UINT64, rows, 1, fill);
 }
 
 void File::write_table(const std::string& dataset, const std::vector<double>& values, std::size_t columns,
@@ -463,7 +502,7 @@ void File::write_table(const std::string& dataset, const std::vector<std::uint64
                         attributes);
 }
 
-void File::write_dataset(const std::string& dataset, const std::vector<std::int32_t>& values,
+void File::write_dataset(const std::string& dataset, std::span<const std::int32_t> values,
                          const StringAttributes& attributes) {
   write_numeric_dataset(dataset, H5T_STD_I32LE, H5T_NATIVE_INT32, {values.size()}, values.data(), attributes);
 }

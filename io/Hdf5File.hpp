@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -119,14 +120,25 @@ class File {
   // Creates the group (its parent must exist); a no-op if it already exists.
   void create_group(const std::string& group);
 
-  void write_dataset(const std::string& dataset, const std::vector<double>& values,
+  // (Spans: a store's field is written where it lies, never copied.)
+  void write_dataset(const std::string& dataset, std::span<const double> values,
                      const StringAttributes& attributes = {});
-  void write_dataset(const std::string& dataset, const std::vector<Vec3>& values,
+  void write_dataset(const std::string& dataset, std::span<const Vec3> values,
                      const StringAttributes& attributes = {});
-  void write_dataset(const std::string& dataset, const std::vector<std::uint64_t>& values,
+  void write_dataset(const std::string& dataset, std::span<const std::uint64_t> values,
                      const StringAttributes& attributes = {});
-  void write_dataset(const std::string& dataset, const std::vector<std::int32_t>& values,
+  void write_dataset(const std::string& dataset, std::span<const std::int32_t> values,
                      const StringAttributes& attributes = {});
+  // Datasets of values that are not in memory as one array (scaled or gathered on the way),
+  // filled a piece of rows at a time through one small buffer: fill(first, out) writes rows
+  // first, first + 1, ... into `out` (row-major, whole rows). Float64 rows of `columns` values
+  // (rank 1 where that is 1, else rows x columns), or uint64 scalars. The file holds the same
+  // dataset as write_dataset's of the whole array.
+  using DoublePieceFill = std::function<void(std::size_t first, std::span<double> out)>;
+  using IdPieceFill = std::function<void(std::size_t first, std::span<std::uint64_t> out)>;
+  void write_dataset_in_pieces(const std::string& dataset, std::size_t rows, std::size_t columns,
+                               const DoublePieceFill& fill);
+  void write_dataset_in_pieces(const std::string& dataset, std::size_t rows, const IdPieceFill& fill);
   // Two-dimensional tables, row-major, `columns` values per row (GADGET's GroupMassType).
   void write_table(const std::string& dataset, const std::vector<double>& values, std::size_t columns,
                    const StringAttributes& attributes = {});
@@ -159,6 +171,10 @@ class File {
   void write_numeric_dataset(const std::string& dataset, hid_t file_type, hid_t memory_type,
                              const std::vector<hsize_t>& dims, const void* data,
                              const StringAttributes& attributes);
+  Id create_dataset(const std::string& dataset, hid_t file_type, const std::vector<hsize_t>& dims);
+  template <class T>
+  void write_pieces(const std::string& dataset, hid_t file_type, hid_t memory_type, std::size_t rows,
+                    std::size_t columns, const std::function<void(std::size_t, std::span<T>)>& fill);
   void write_numeric_attribute(const std::string& object, const std::string& name, hid_t file_type,
                                hid_t memory_type, const std::vector<hsize_t>& dims, const void* data);
 

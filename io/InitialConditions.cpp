@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <numeric>
+#include <span>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -440,114 +441,197 @@ InitialConditions read_initial_conditions(const std::string& path, const IcReadO
 
 namespace {
 
-// Common mass of all entries, or 0 if they differ (for /Header/MassTable).
-double common_mass(const std::vector<double>& mass) {
-  if (mass.empty()) return 0.0;
-  for (double m : mass)
-    if (m != mass[0]) return 0.0;
-  return mass[0];
+// The fields a file holds, viewed where they lie in either store (a run's, or a generator's
+// lean one), so that one writer serves both and copies neither.
+struct GasFields {
+  std::span<const std::uint64_t> id;
+  std::span<const double> mass;
+  std::span<const Vec3> x, v;  // v: the velocity the file's convention starts from
+  std::span<const double> u, h;
+};
+struct CollisionlessFields {
+  std::span<const std::uint64_t> id;
+  std::span<const fountain::Species> species;
+  std::span<const double> mass;
+  std::span<const Vec3> x, v;
+};
+
+GasFields fields_of(const GasParticles& g) { return {g.id, g.mass, g.x, g.v_full, g.u_full, g.h}; }
+GasFields fields_of(const IcGasParticles& g) { return {g.id, g.mass, g.x, g.v, g.u, g.h}; }
+CollisionlessFields fields_of(const CollisionlessParticles& d) { return {d.id, d.species, d.mass, d.x, d.v_full}; }
+CollisionlessFields fields_of(const IcCollisionlessParticles& d) { return {d.id, d.species, d.mass, d.x, d.v}; }
+
+// The rows of one particle type in the file: all of a store's particles in order, or (a zoom's
+// dark matter, split by resolution) the listed ones.
+struct Rows {
+  std::size_t count = 0;
+  std::vector<std::size_t> members;  // empty: row r is particle r
+  bool all() const { return members.empty(); }
+  std::size_t operator[](std::size_t r) const { return all() ? r : members[r]; }
+};
+
+// Common mass of the rows, or 0 if they differ (for /Header/MassTable).
+double common_mass(std::span<const double> mass, const Rows& rows) {
+  if (rows.count == 0) return 0.0;
+  const double first = mass[rows[0]];
+  for (std::size_t r = 1; r < rows.count; ++r)
+    if (mass[rows[r]] != first) return 0.0;
+  return first;
 }
 
-void write_ic_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
+// The smallest ID two particles share, gas and collisionless together (0 and false if none).
+// Each type's IDs are read where they lie when they are in order already, as generators make
+// them, else from a sorted copy: a large box's IDs are never copied.
+bool shared_id(std::span<const std::uint64_t> a, std::span<const std::uint64_t> b, std::uint64_t& id) {
+  std::vector<std::uint64_t> sorted_a, sorted_b;
+  auto in_order = [](std::span<const std::uint64_t> ids, std::vector<std::uint64_t>& copy) {
+    if (std::is_sorted(ids.begin(), ids.end())) return ids;
+    copy.assign(ids.begin(), ids.end());
+    std::sort(copy.begin(), copy.end());
+    return std::span<const std::uint64_t>(copy);
+  };
+  a = in_order(a, sorted_a);
+  b = in_order(b, sorted_b);
+  bool found = false;
+  auto note = [&](std::uint64_t candidate) {
+    if (!found || candidate < id) id = candidate;
+    found = true;
+  };
+  for (std::span<const std::uint64_t> ids : {a, b}) {
+    const auto twice = std::adjacent_find(ids.begin(), ids.end());
+    if (twice != ids.end()) note(*twice);
+  }
+  for (std::size_t i = 0, j = 0; i < a.size() && j < b.size();) {
+    if (a[i] < b[j]) {
+      ++i;
+    } else if (b[j] < a[i]) {
+      ++j;
+    } else {
+      note(a[i]);
+      break;
+    }
+  }
+  return found;
+}
+
+// The rows' vectors times `scale`, written straight from the store where nothing changes.
+void write_vectors(File& file, const std::string& dataset, std::span<const Vec3> values, const Rows& rows,
+                   double scale = 1.0) {
+  if (rows.all() && scale == 1.0) return file.write_dataset(dataset, values);
+  file.write_dataset_in_pieces(dataset, rows.count, 3, [&](std::size_t first, std::span<double> out) {
+    for (std::size_t r = 0; 3 * r < out.size(); ++r) {
+      const Vec3 v = values[rows[first + r]] * scale;
+      out[3 * r] = v.x;
+      out[3 * r + 1] = v.y;
+      out[3 * r + 2] = v.z;
+    }
+  });
+}
+
+void write_scalars(File& file, const std::string& dataset, std::span<const double> values, const Rows& rows,
+                   double scale = 1.0) {
+  if (rows.all() && scale == 1.0) return file.write_dataset(dataset, values);
+  file.write_dataset_in_pieces(dataset, rows.count, 1, [&](std::size_t first, std::span<double> out) {
+    for (std::size_t r = 0; r < out.size(); ++r) out[r] = values[rows[first + r]] * scale;
+  });
+}
+
+void write_ids(File& file, const std::string& dataset, std::span<const std::uint64_t> ids, const Rows& rows) {
+  if (rows.all()) return file.write_dataset(dataset, ids);
+  file.write_dataset_in_pieces(dataset, rows.count, [&](std::size_t first, std::span<std::uint64_t> out) {
+    for (std::size_t r = 0; r < out.size(); ++r) out[r] = ids[rows[first + r]];
+  });
+}
+
+void write_ic_file(const std::string& path, const GasFields& gas, const CollisionlessFields* dm,
                    const Vec3& box_size, bool periodic, double time, const CosmologicalIcInfo* cosmological = nullptr) {
-  const std::size_t n = gas.size();
+  const std::size_t n = gas.id.size();
   const std::string prefix = "cannot create initial conditions " + path + ": ";
-  if (n == 0 && (cosmological == nullptr || dm == nullptr || dm->size() == 0))
+  if (n == 0 && (cosmological == nullptr || dm == nullptr || dm->id.empty()))
     throw InputError(prefix + "there are no gas particles to write");
   auto check = [&](std::size_t size, const char* field) {
     if (size != n) throw InputError(prefix + fmt::format("gas field {} has {} entries, expected {}", field, size, n));
   };
   check(gas.mass.size(), "mass");
   check(gas.x.size(), "x");
-  check(gas.v_full.size(), "v_full");
-  check(gas.u_full.size(), "u_full");
+  check(gas.v.size(), "v_full");
+  check(gas.u.size(), "u_full");
   check(gas.h.size(), "h");
 
-  const std::size_t n_dm = dm != nullptr ? dm->size() : 0;
+  const std::size_t n_dm = dm != nullptr ? dm->id.size() : 0;
   if (dm != nullptr) {
     auto check_dm = [&](std::size_t size, const char* field) {
       if (size != n_dm)
         throw InputError(prefix + fmt::format("dark matter field {} has {} entries, expected {}", field, size, n_dm));
     };
+    check_dm(dm->species.size(), "species");
     check_dm(dm->mass.size(), "mass");
     check_dm(dm->x.size(), "x");
-    check_dm(dm->v_full.size(), "v_full");
+    check_dm(dm->v.size(), "v_full");
     for (std::size_t i = 0; i < n_dm; ++i)
       if (!std::isfinite(dm->mass[i]) || dm->mass[i] <= 0.0)
         throw InputError(prefix + fmt::format("dark matter particle ID {} has mass {} (must be positive)", dm->id[i],
                                               dm->mass[i]));
     // IDs must be unique across both types.
-    std::vector<std::uint64_t> all(gas.id);
-    all.insert(all.end(), dm->id.begin(), dm->id.end());
-    std::sort(all.begin(), all.end());
-    const auto dup = std::adjacent_find(all.begin(), all.end());
-    if (dup != all.end())
+    std::uint64_t twice = 0;
+    if (shared_id(gas.id, dm->id, twice))
       throw InputError(prefix + fmt::format("particle ID {} is used more than once (IDs must be unique across gas "
                                             "and dark matter)",
-                                            *dup));
+                                            twice));
   }
 
   // A comoving run's files hold GADGET's velocities and physical energies (u = u' / a^2 for
-  // gamma = 5/3, the only adiabatic index of comoving runs).
+  // gamma = 5/3, the only adiabatic index of comoving runs), scaled on the way to the file.
   const double a = cosmological != nullptr ? cosmological->a : 1.0;
   const double v_scale = cosmological != nullptr ? std::pow(a, -1.5) : 1.0;
   const double u_scale = cosmological != nullptr ? 1.0 / (a * a) : 1.0;
-  auto scaled = [](auto values, double s) {
-    if (s != 1.0)
-      for (auto& v : values) v = v * s;
-    return values;
-  };
   // A zoom's low-resolution dark matter goes to /PartType2, the rest to /PartType1.
-  std::size_t n_low = 0;
-  if (dm != nullptr)
-    for (fountain::Species s : dm->species) n_low += s == fountain::Species::LowResDarkMatter;
-  const std::size_t n_high = n_dm - n_low;
+  Rows high, low;
+  if (dm != nullptr) {
+    for (fountain::Species s : dm->species) low.count += s == fountain::Species::LowResDarkMatter;
+    high.count = n_dm - low.count;
+    if (low.count > 0 && high.count > 0)
+      for (std::size_t i = 0; i < n_dm; ++i)
+        (dm->species[i] == fountain::Species::LowResDarkMatter ? low : high).members.push_back(i);
+  }
   hdf5::write_file_atomically(path, "initial conditions", [&](File& file) {
     if (cosmological != nullptr) {
-      hdf5::write_gadget_header(file, {n, n_high, n_low, 0, 0, 0}, {box_size.x}, a, &cosmological->cosmology);
+      hdf5::write_gadget_header(file, {n, high.count, low.count, 0, 0, 0}, {box_size.x}, a, &cosmological->cosmology);
       const Units& u = cosmological->units;
       file.create_group("/Units");
       file.write_attribute("/Units", "UnitLength_in_cm", u.length_cgs);
       file.write_attribute("/Units", "UnitMass_in_g", u.mass_cgs);
       file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", u.velocity_cgs);
     } else {
-      hdf5::write_gadget_header(file, {n, n_high, n_low, 0, 0, 0}, {box_size.x, box_size.y, box_size.z}, time);
+      hdf5::write_gadget_header(file, {n, high.count, low.count, 0, 0, 0}, {box_size.x, box_size.y, box_size.z},
+                                time);
     }
     // Not a GADGET field; records the boundary conditions the set-up was made for.
     file.write_attribute(kHeader, "Periodic", periodic ? 1 : 0);
     std::vector<double> table(6, 0.0);
     if (n > 0) {
+      const Rows all{n, {}};
       file.create_group(kGas);
       file.write_dataset(kGasSpecies.dataset("Coordinates"), gas.x);
-      file.write_dataset(kGasSpecies.dataset("Velocities"), scaled(gas.v_full, v_scale));
+      write_vectors(file, kGasSpecies.dataset("Velocities"), gas.v, all, v_scale);
       file.write_dataset(kGasSpecies.dataset("ParticleIDs"), gas.id);
       file.write_dataset(kGasSpecies.dataset("Masses"), gas.mass);
-      file.write_dataset(kGasSpecies.dataset("InternalEnergy"), scaled(gas.u_full, u_scale));
+      write_scalars(file, kGasSpecies.dataset("InternalEnergy"), gas.u, all, u_scale);
       file.write_dataset(kGasSpecies.dataset("SmoothingLength"), gas.h);
-      table[0] = common_mass(gas.mass);
+      table[0] = common_mass(gas.mass, all);
     }
     if (dm == nullptr) return;
 
-    for (const bool low : {false, true}) {
-      if ((low ? n_low : n_high) == 0) continue;
-      std::vector<Vec3> x, v;
-      std::vector<std::uint64_t> id;
-      std::vector<double> mass;
-      for (std::size_t i = 0; i < n_dm; ++i) {
-        if ((dm->species[i] == fountain::Species::LowResDarkMatter) != low) continue;
-        x.push_back(dm->x[i]);
-        v.push_back(dm->v_full[i] * v_scale);
-        id.push_back(dm->id[i]);
-        mass.push_back(dm->mass[i]);
-      }
+    for (const Rows* rows : {&high, &low}) {
+      if (rows->count == 0) continue;
       // Each type's common mass in the table (the header as written above has zeros).
-      const Species& sp = low ? kType2 : kDarkMatterSpecies;
-      table[static_cast<std::size_t>(sp.type)] = common_mass(mass);
+      const Species& sp = rows == &low ? kType2 : kDarkMatterSpecies;
+      table[static_cast<std::size_t>(sp.type)] = common_mass(dm->mass, *rows);
       file.create_group(sp.group);
-      file.write_dataset(sp.dataset("Coordinates"), x);
-      file.write_dataset(sp.dataset("Velocities"), v);
-      file.write_dataset(sp.dataset("ParticleIDs"), id);
-      file.write_dataset(sp.dataset("Masses"), mass);
+      write_vectors(file, sp.dataset("Coordinates"), dm->x, *rows);
+      write_vectors(file, sp.dataset("Velocities"), dm->v, *rows, v_scale);
+      write_ids(file, sp.dataset("ParticleIDs"), dm->id, *rows);
+      write_scalars(file, sp.dataset("Masses"), dm->mass, *rows);
     }
     file.write_attribute(kHeader, "MassTable", table);
   });
@@ -557,17 +641,25 @@ void write_ic_file(const std::string& path, const GasParticles& gas, const Colli
 
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const Vec3& box_size,
                               bool periodic, double time) {
-  write_ic_file(path, gas, nullptr, box_size, periodic, time);
+  write_ic_file(path, fields_of(gas), nullptr, box_size, periodic, time);
 }
 
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               const Vec3& box_size, bool periodic, double time) {
-  write_ic_file(path, gas, &dm, box_size, periodic, time);
+  const CollisionlessFields d = fields_of(dm);
+  write_ic_file(path, fields_of(gas), &d, box_size, periodic, time);
 }
 
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               double box_size, const CosmologicalIcInfo& info) {
-  write_ic_file(path, gas, &dm, {box_size, box_size, box_size}, true, info.a, &info);
+  const CollisionlessFields d = fields_of(dm);
+  write_ic_file(path, fields_of(gas), &d, {box_size, box_size, box_size}, true, info.a, &info);
+}
+
+void write_initial_conditions(const std::string& path, const IcGasParticles& gas, const IcCollisionlessParticles& dm,
+                              double box_size, const CosmologicalIcInfo& info) {
+  const CollisionlessFields d = fields_of(dm);
+  write_ic_file(path, fields_of(gas), &d, {box_size, box_size, box_size}, true, info.a, &info);
 }
 
 }  // namespace fountain::io

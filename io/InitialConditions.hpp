@@ -7,6 +7,7 @@
 #include "cosmology/Background.hpp"
 #include "particles/CollisionlessParticles.hpp"
 #include "particles/GasParticles.hpp"
+#include "particles/IcParticles.hpp"
 
 namespace fountain::io {
 
@@ -73,6 +74,10 @@ struct CosmologicalIcInfo {
   Units units;
 };
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
+                              double box_size, const CosmologicalIcInfo& info);
+// The same from a generator's lean stores (v and u in the run's variables). Nothing is copied
+// whole: fields are written where they lie, scaled ones a piece at a time.
+void write_initial_conditions(const std::string& path, const IcGasParticles& gas, const IcCollisionlessParticles& dm,
                               double box_size, const CosmologicalIcInfo& info);
 
 }  // namespace fountain::io

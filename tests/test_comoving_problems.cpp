@@ -281,12 +281,12 @@ TEST(ComovingProblems, UnperturbedZoomLoad) {
     cfg.comoving.cosmology.omega_b = 0.0;  // dark matter only: all matter
     cfg.gravity.softening_dark_matter = 0.035 * p.box / 32;
     cfg.gravity.softening_gas = 0.5 * cfg.gravity.softening_dark_matter;
-    Engine engine(cfg, GasParticles{}, load.dark_matter);
+    Engine engine(cfg, GasParticles{}, to_run_particles(load.dark_matter));
     engine.initialise();
     long long steps = 0;
     while (engine.ti_current() < TimeLine::ticks) engine.step(), ++steps;
     engine.drift_all();
-    const CollisionlessParticles& start = load.dark_matter;
+    const IcCollisionlessParticles& start = load.dark_matter;
     // The parent load's particles are level-4 blocks; the zoom's IDs carry their level.
     auto level_of = [&](std::uint64_t id) { return !zoom ? 4 : (id - 1) >> 42 ? 3 : (id - 1) >> 41 ? 4 : 5; };
     std::map<std::uint64_t, std::size_t> initial;

@@ -433,6 +433,53 @@ TEST_F(IoTest, FileWithoutDarkMatterGivesNone) {
   EXPECT_EQ(fountain::io::read_initial_conditions(path).dm.size(), 0u);
 }
 
+// IDs must be unique across gas and dark matter: the writer names the smallest one used twice,
+// whether each type's IDs come in order (read where they lie) or not (read from a sorted copy).
+TEST_F(IoTest, WriterNamesTheSmallestRepeatedId) {
+  const std::string path = file("ics.hdf5");
+  GasParticles gas = make_gas(10, 1);              // IDs 1 .. 10
+  CollisionlessParticles dm = make_dm(10, 20);     // 20, 23, .., 47
+  fountain::io::write_initial_conditions(path, gas, dm, {2, 2, 2}, true);
+  auto refusal = [&] { return error_of([&] { fountain::io::write_initial_conditions(path, gas, dm, {2, 2, 2}, true); }); };
+  dm.id[7] = 9;
+  dm.id[8] = 4;  // unsorted now; 4 and 9 are both the gas's
+  EXPECT_TRUE(contains(refusal(), "particle ID 4 is used more than once")) << refusal();
+  dm = make_dm(10, 20);
+  std::swap(gas.id[0], gas.id[9]);  // gas out of order, 8 twice within it and 23 shared
+  gas.id[2] = 23;
+  gas.id[5] = 8;
+  EXPECT_TRUE(contains(refusal(), "particle ID 8 is used more than once")) << refusal();
+}
+
+// The lean stores of a generator (dark matter of both resolutions, written gathered by type a
+// piece at a time) and the same particles in a run's stores write the same file.
+TEST_F(IoTest, LeanStoresWriteWhatTheRunsStoresWrite) {
+  fountain::IcGasParticles gas;
+  fountain::IcCollisionlessParticles dm;
+  const GasParticles g = make_gas(7, 1);
+  const CollisionlessParticles d = make_dm(70000, 100);  // more rows than one piece
+  for (std::size_t i = 0; i < g.size(); ++i) gas.push_back(g.id[i], g.mass[i], g.x[i], g.v[i], g.u[i], g.h[i]);
+  for (std::size_t i = 0; i < d.size(); ++i)
+    dm.push_back(d.id[i], i % 3 == 0 ? fountain::Species::LowResDarkMatter : fountain::Species::DarkMatter,
+                 d.mass[i], d.x[i], d.v[i]);
+  const fountain::io::CosmologicalIcInfo info{{}, 0.25, {}};
+  const std::string lean = file("lean.hdf5"), run = file("run.hdf5");
+  fountain::io::write_initial_conditions(lean, gas, dm, 3.0, info);
+  fountain::io::write_initial_conditions(run, fountain::to_run_particles(gas), fountain::to_run_particles(dm), 3.0, info);
+  const File a(lean, File::Mode::read), b(run, File::Mode::read);
+  for (const char* type : {"/PartType0/", "/PartType1/", "/PartType2/"})
+    for (const char* name : {"Coordinates", "Velocities", "Masses"}) {
+      const std::string dataset = std::string(type) + name;
+      EXPECT_EQ(a.read_doubles(dataset), b.read_doubles(dataset)) << dataset;
+    }
+  EXPECT_EQ(a.read_uint64("/PartType2/ParticleIDs"), b.read_uint64("/PartType2/ParticleIDs"));
+  EXPECT_EQ(a.read_doubles("/PartType0/InternalEnergy"), b.read_doubles("/PartType0/InternalEnergy"));
+  EXPECT_EQ(a.read_attribute_uint64("/Header", "NumPart_ThisFile"),
+            (std::vector<std::uint64_t>{7, 46666, 23334, 0, 0, 0}));
+  // The scaled velocities: v' / a^(3/2), here 8 v'.
+  EXPECT_EQ(a.read_vec3("/PartType1/Velocities")[0], d.v[1] * 8.0);
+}
+
 TEST_F(IoTest, DarkMatterMassTableIsUsedWhenMassesAreAbsent) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10, 6);

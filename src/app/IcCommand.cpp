@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <type_traits>
 #include <fstream>
 #include <sstream>
@@ -51,7 +52,14 @@ double ic_particle_count(const IcRequest& r) {
   return 2.0 * n;                                                    // sphere: gas + dark matter
 }
 
-std::size_t ic_bytes_per_particle() {
+std::size_t ic_bytes_per_particle(const std::string& problem) {
+  if (problem == "cosmo" || problem == "zoom") {
+    // Lean stores (IcParticles.hpp; the gas's fields, the wider), and about 32 bytes a cell of
+    // grids: the linear density's and phi2's source's coefficients and FFTW's two buffers.
+    constexpr std::size_t lean = sizeof(std::uint64_t) + 3 * sizeof(double) + 2 * sizeof(Vec3);
+    // A zoom keeps its finest lattice's positions and velocities at both shifts to average.
+    return lean + 32 + (problem == "zoom" ? 2 * sizeof(Vec3) : 0);
+  }
   std::size_t bytes = 0;
   GasParticles one;
   one.for_each_field([&](auto& field) { bytes += sizeof(typename std::decay_t<decltype(field)>::value_type); });
@@ -111,7 +119,7 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
                                  "(the parameter file's hydro.gamma takes the same range)",
                                  r.gamma));
   const double count = ic_particle_count(r);
-  const double need = count * static_cast<double>(ic_bytes_per_particle());
+  const double need = count * static_cast<double>(ic_bytes_per_particle(r.problem));
   if (!(need <= memory_bytes))
     throw InputError(fmt::format("ic {} -n {} would make about {:.3g} particles, needing about {} of memory; "
                                  "this machine has {} available: choose a smaller -n",

@@ -33,9 +33,9 @@ struct IcRequest {
 // The particle count a request makes (estimated from the lattice, before anything is built).
 double ic_particle_count(const IcRequest& r);
 
-// Bytes the generator needs per particle: every particle field plus the lattice and the
-// buffers of the HDF5 writer.
-std::size_t ic_bytes_per_particle();
+// Bytes the generator of `problem` needs per particle: every particle field plus the lattice
+// and the buffers of the HDF5 writer; for cosmo and zoom, the lean stores' fields and the grids.
+std::size_t ic_bytes_per_particle(const std::string& problem);
 
 // Memory this process may still take, in bytes (MemAvailable, else the physical memory).
 double available_memory_bytes();

@@ -52,21 +52,18 @@ std::size_t choose_halo(const io::FofHalos& h, const IcRequest::Zoom& z, const s
 void scale_box(ics::CosmologicalBox& box, double scale) {
   const double s = std::cbrt(scale);
   box.box *= s;
-  for (std::size_t i = 0; i < box.dark_matter.size(); ++i) {
-    box.dark_matter.x[i] *= s;
-    box.dark_matter.v[i] *= s;
-    box.dark_matter.v_full[i] *= s;
-    box.dark_matter.mass[i] *= scale;
+  IcCollisionlessParticles& dm = box.dark_matter;
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    dm.x[i] *= s;
+    dm.v[i] *= s;
+    dm.mass[i] *= scale;
   }
-  GasParticles& gas = box.gas;
+  IcGasParticles& gas = box.gas;
   for (std::size_t i = 0; i < gas.size(); ++i) {
     gas.x[i] *= s;
     gas.v[i] *= s;
-    gas.v_full[i] *= s;
     gas.mass[i] *= scale;
-    gas.mass_initial[i] *= scale;
     gas.u[i] *= s * s;
-    gas.u_full[i] *= s * s;
   }
 }
 

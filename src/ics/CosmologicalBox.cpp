@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "core/Error.hpp"
 #include "core/IdealGas.hpp"
@@ -36,7 +37,8 @@ SpectralField linear_density_of(const std::vector<double>& noise, const Cosmolog
   return delta;
 }
 
-LatticeParticles lagrangian_particles(const SpectralField& delta, const CosmologicalBoxParams& p, double shift) {
+void lattice_motion(DisplacementFields& fields, const CosmologicalBoxParams& p, double shift, std::span<Vec3> x,
+                    std::span<Vec3> v) {
   const int n = p.cells();
   const double cell = p.box / n;
   const cosmology::Background background(p.cosmology);
@@ -48,21 +50,27 @@ LatticeParticles lagrangian_particles(const SpectralField& delta, const Cosmolog
   const double hubble = background.hubble(a);
   // v' = a v_pec = a^2 H [f D psi1 + f2 D2 grad phi2].
   const double v1 = a * a * hubble * f * d, v2 = a * a * hubble * f2 * d2;
-  const Displacements disp = lagrangian_displacements(delta, p.lpt_order, shift);
-  const std::size_t cells = static_cast<std::size_t>(n) * n * n;
-  LatticeParticles out;
-  out.x.resize(cells);
-  out.v.resize(cells);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k) {
-        const std::size_t c = (static_cast<std::size_t>(i) * n + j) * n + k;
-        const Vec3 psi{disp.first[0][c], disp.first[1][c], disp.first[2][c]};
-        Vec3 psi2{};
-        if (p.lpt_order >= 2) psi2 = {disp.second[0][c], disp.second[1][c], disp.second[2][c]};
-        out.x[c] = Vec3{i + 0.5 + shift, j + 0.5 + shift, k + 0.5 + shift} * cell + d * psi + d2 * psi2;
-        out.v[c] = v1 * psi + v2 * psi2;
-      }
+  for (int axis = 0; axis < 3; ++axis) {
+    // psi1 waits in v while grad phi2 takes the fields' one buffer.
+    const std::span<const double> psi1 = fields.first(axis, shift);
+    for (std::size_t c = 0; c < psi1.size(); ++c) v[c][axis] = psi1[c];
+    const std::span<const double> psi2 = fields.order() >= 2 ? fields.second(axis, shift) : std::span<const double>{};
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j)
+        for (int k = 0; k < n; ++k) {
+          const std::size_t c = (static_cast<std::size_t>(i) * n + j) * n + k;
+          const int q[3] = {i, j, k};
+          const double psi = v[c][axis], grad2 = psi2.empty() ? 0.0 : psi2[c];
+          x[c][axis] = (q[axis] + 0.5 + shift) * cell + d * psi + d2 * grad2;
+          v[c][axis] = v1 * psi + v2 * grad2;
+        }
+  }
+}
+
+LatticeParticles lagrangian_particles(DisplacementFields& fields, const CosmologicalBoxParams& p, double shift) {
+  const std::size_t cells = static_cast<std::size_t>(p.cells()) * p.cells() * p.cells();
+  LatticeParticles out{std::vector<Vec3>(cells), std::vector<Vec3>(cells)};
+  lattice_motion(fields, p, shift, out.x, out.v);
   return out;
 }
 
@@ -83,45 +91,43 @@ CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Unit
                                  p.level));
   if (!(p.a_start > 0.0 && p.a_start < 1.0)) throw InputError(fmt::format("starting scale factor {} is not in (0, 1)", p.a_start));
   stage("white noise and the linear density");
-  const SpectralField delta = linear_density(p);
+  SpectralField delta = linear_density(p);
+  if (p.lpt_order >= 2) stage("the second-order displacements' source");
+  // The transforms' buffers and phi2's source, made once for both species.
+  DisplacementFields fields(std::move(delta), p.lpt_order);
   const double cell_mass = cell_matter(p, p.level, units);
   const double gas_fraction = p.gas ? p.cosmology.omega_b / p.cosmology.omega_m : 0.0;
+  const std::size_t cells = static_cast<std::size_t>(p.cells()) * p.cells() * p.cells();
+  auto fold = [&](std::vector<Vec3>& x) {
+    for (Vec3& y : x)
+      for (int axis = 0; axis < 3; ++axis) y[axis] -= p.box * std::floor(y[axis] / p.box);
+  };
 
   CosmologicalBox out;
   out.box = p.box;
   out.a = p.a_start;
-  auto fold = [&](Vec3 x) {
-    for (int axis = 0; axis < 3; ++axis) x[axis] -= p.box * std::floor(x[axis] / p.box);
-    return x;
-  };
-  {
-    stage(p.lpt_order >= 2 ? "dark matter: Zel'dovich and second-order displacements" : "dark matter: Zel'dovich displacements");
-    const LatticeParticles lattice = lagrangian_particles(delta, p, 0.0);
-    CollisionlessParticles& dm = out.dark_matter;
-    dm.resize(lattice.x.size());
-    for (std::size_t c = 0; c < lattice.x.size(); ++c) {
-      dm.id[c] = 1 + c;
-      dm.species[c] = Species::DarkMatter;
-      dm.mass[c] = (1.0 - gas_fraction) * cell_mass;
-      dm.x[c] = fold(lattice.x[c]);
-      dm.v[c] = dm.v_full[c] = lattice.v[c];
-    }
+  stage(p.lpt_order >= 2 ? "dark matter: Zel'dovich and second-order displacements" : "dark matter: Zel'dovich displacements");
+  IcCollisionlessParticles& dm = out.dark_matter;
+  dm.resize(cells);  // species DarkMatter
+  for (std::size_t c = 0; c < cells; ++c) {
+    dm.id[c] = 1 + c;
+    dm.mass[c] = (1.0 - gas_fraction) * cell_mass;
   }
+  lattice_motion(fields, p, 0.0, dm.x, dm.v);
+  fold(dm.x);
   if (p.gas) {
     stage("gas: the same fields half a cell on");
-    const LatticeParticles lattice = lagrangian_particles(delta, p, 0.5);
-    GasParticles& gas = out.gas;
-    gas.resize(lattice.x.size());
+    IcGasParticles& gas = out.gas;
+    gas.resize(cells);  // h = 0: for the run to find
     const double kelvin_per_u = ideal_gas_kelvin_per_energy(units, 5.0 / 3.0, cosmology::kNeutralMeanMolecularWeight);
     const double u_comoving = p.a_start * p.a_start * cosmology::initial_gas_temperature(p.cosmology, p.a_start) / kelvin_per_u;
-    for (std::size_t c = 0; c < lattice.x.size(); ++c) {
+    for (std::size_t c = 0; c < cells; ++c) {
       gas.id[c] = 1 + c + (std::uint64_t{1} << 40);
       gas.mass[c] = gas_fraction * cell_mass;
-      gas.x[c] = fold(lattice.x[c]);
-      gas.v[c] = gas.v_full[c] = lattice.v[c];
-      gas.u[c] = gas.u_full[c] = u_comoving;
-      gas.h[c] = 0.0;
+      gas.u[c] = u_comoving;
     }
+    lattice_motion(fields, p, 0.5, gas.x, gas.v);
+    fold(gas.x);
   }
   return out;
 }

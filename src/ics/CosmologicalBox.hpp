@@ -2,6 +2,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -10,8 +11,7 @@
 #include "cosmology/Background.hpp"
 #include "cosmology/TransferFunction.hpp"
 #include "ics/LagrangianPerturbation.hpp"
-#include "particles/CollisionlessParticles.hpp"
-#include "particles/GasParticles.hpp"
+#include "particles/IcParticles.hpp"
 
 namespace fountain::ics {
 
@@ -34,9 +34,10 @@ struct CosmologicalBoxParams {
 // Dark matter of cell n = (i N + j) N + k has ID 1 + n, at q = (i + 1/2, j + 1/2, k + 1/2) L/N
 // plus its displacement; the gas of that cell ID 1 + n + 2^40 at q + L/(2N) (1, 1, 1) plus the
 // same fields there. Masses: Omega_m rho_crit0 (L/N)^3 per cell, split by Omega_b / Omega_m.
+// Lean stores (what the file holds): to_run_particles gives an engine's.
 struct CosmologicalBox {
-  GasParticles gas;
-  CollisionlessParticles dark_matter;
+  IcGasParticles gas;
+  IcCollisionlessParticles dark_matter;
   double box = 0.0;
   double a = 0.0;
 };
@@ -50,13 +51,18 @@ SpectralField linear_density(const CosmologicalBoxParams& p);
 // The same from a given white-noise grid of p.level (a zoom's nested noise).
 SpectralField linear_density_of(const std::vector<double>& noise, const CosmologicalBoxParams& p);
 
-// The particle of every cell of p.level's grid at a_start: its Lagrangian position (the cell's
-// centre, moved by `shift` cells along each axis) plus its displacement, not folded into the
-// box, and its velocity v' = a^2 H (f D psi1 + f2 D2 grad phi2).
+// The particle of every cell of p.level's grid at a_start, cell c = (i N + j) N + k: into x[c]
+// its Lagrangian position (the cell's centre, moved by `shift` cells along each axis) plus its
+// displacement, not folded into the box, and into v[c] its velocity
+// v' = a^2 H (f D psi1 + f2 D2 grad phi2). `fields` are of the linear density on p.level's
+// grid; one set serves every shift. Written a component at a time, straight into x and v.
+void lattice_motion(DisplacementFields& fields, const CosmologicalBoxParams& p, double shift, std::span<Vec3> x,
+                    std::span<Vec3> v);
+// The same into vectors of their own (a zoom averages them over blocks of cells).
 struct LatticeParticles {
   std::vector<Vec3> x, v;
 };
-LatticeParticles lagrangian_particles(const SpectralField& delta, const CosmologicalBoxParams& p, double shift);
+LatticeParticles lagrangian_particles(DisplacementFields& fields, const CosmologicalBoxParams& p, double shift);
 
 // Omega_m rho_crit0 (L/N)^3: the matter of one cell of p.level's grid.
 double cell_matter(const CosmologicalBoxParams& p, int level, const Units& units);

@@ -3,6 +3,8 @@
 #include <array>
 #include <complex>
 #include <functional>
+#include <memory>
+#include <span>
 #include <vector>
 
 namespace fountain::ics {
@@ -31,6 +33,37 @@ SpectralField forward_transform(const std::vector<double>& grid, int n, double b
 // modes dropped): a smoothed density, say.
 std::vector<double> real_field(const SpectralField& f, const std::function<double(double)>& filter);
 
+class Transforms;  // FFTW's plans and buffers for one grid size (LagrangianPerturbation.cpp)
+
+// The displacement fields of a linear density `delta` (at D = 1), one component at a time:
+// positions are q + D psi1 + D2 grad phi2, with psi1 = -grad phi1, lap phi1 = delta, and
+// lap phi2 = sum_{i<j} phi1,ii phi1,jj - phi1,ij^2. A component is an N^3 grid in a buffer the
+// fields share and reuse, so that a box's particles take its values as they come rather than
+// six grids being held at once; the transforms are planned once, and phi2's source (of delta
+// alone) is worked out once for every species and shift.
+class DisplacementFields {
+ public:
+  // order 1: Zel'dovich; 2: 2LPT (its source is worked out here).
+  DisplacementFields(SpectralField delta, int order);
+  ~DisplacementFields();
+  DisplacementFields(const DisplacementFields&) = delete;
+  DisplacementFields& operator=(const DisplacementFields&) = delete;
+
+  int order() const { return order_; }
+  // Component `axis` of psi1 at the cells moved by `shift` cells along each axis (0: the
+  // cells; 0.5: their far corners, where the gas sits), cell (i N + j) N + k at that index.
+  // Valid until the next call of first() or second().
+  std::span<const double> first(int axis, double shift);
+  // The same of grad phi2 (order 2 only).
+  std::span<const double> second(int axis, double shift);
+
+ private:
+  SpectralField delta_;
+  int order_;
+  std::unique_ptr<Transforms> transforms_;
+  SpectralField source_;  // phi2's source S's coefficients (order 2)
+};
+
 // Real displacement fields (one N^3 grid per component) at the cell positions shifted by
 // `shift` cells along each axis (0: the cells; 0.5: the cells' far corners, where the gas sits).
 struct Displacements {
@@ -39,7 +72,8 @@ struct Displacements {
 };
 
 // Zel'dovich (order 1) or 2LPT (order 2) displacements of the linear density `delta` (at
-// D = 1): positions are q + D psi1 + D2 grad phi2.
+// D = 1), every component at once: positions are q + D psi1 + D2 grad phi2. (Generators take
+// them a component at a time from DisplacementFields.)
 Displacements lagrangian_displacements(const SpectralField& delta, int order, double shift);
 
 }  // namespace fountain::ics

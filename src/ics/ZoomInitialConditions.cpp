@@ -115,14 +115,15 @@ CosmologicalBox make_zoom(const CosmologicalBoxParams& p, const ZoomLevels& leve
 
   CosmologicalBoxParams fine_params = p;
   fine_params.level = lmax;
-  const SpectralField delta = linear_density_of(nested_noise(p.seed, l0, lmax), fine_params);
-  const LatticeParticles fine = lagrangian_particles(delta, fine_params, 0.0);
+  // One set of fields (and phi2's source) for the dark matter and, half a cell on, the gas.
+  DisplacementFields fields(linear_density_of(nested_noise(p.seed, l0, lmax), fine_params), p.lpt_order);
+  const LatticeParticles fine = lagrangian_particles(fields, fine_params, 0.0);
   const double m_fine = cell_matter(fine_params, lmax, units);
   const int nf = 1 << lmax, r = 1 << (lmax - lp);
   CosmologicalBox out;
   out.box = p.box;
   out.a = p.a_start;
-  CollisionlessParticles& dm = out.dark_matter;
+  IcCollisionlessParticles& dm = out.dark_matter;
   const double block_mass_parent = m_fine * static_cast<double>(r) * r * r;
 
   if (!zoom) {
@@ -131,7 +132,7 @@ CosmologicalBox make_zoom(const CosmologicalBoxParams& p, const ZoomLevels& leve
       for (int j = 0; j < np; ++j)
         for (int k = 0; k < np; ++k) {
           const Block b = block_mean(fine, lmax, lp, i, j, k, p.box);
-          dm.push_back(1 + cell_index(np, i, j, k), Species::DarkMatter, block_mass_parent, b.x, b.v, b.v, 0.0, 0);
+          dm.push_back(1 + cell_index(np, i, j, k), Species::DarkMatter, block_mass_parent, b.x, b.v);
         }
     return out;
   }
@@ -143,28 +144,20 @@ CosmologicalBox make_zoom(const CosmologicalBoxParams& p, const ZoomLevels& leve
       for (int k = 0; k < nf; ++k) {
         if (!region[cell_index(np, i / r, j / r, k / r)]) continue;
         const std::size_t f = cell_index(nf, i, j, k);
-        dm.push_back(1 + f, Species::DarkMatter, (1.0 - gas_fraction) * m_fine, folded(fine.x[f], p.box), fine.v[f],
-                     fine.v[f], 0.0, 0);
+        dm.push_back(1 + f, Species::DarkMatter, (1.0 - gas_fraction) * m_fine, folded(fine.x[f], p.box), fine.v[f]);
       }
   if (p.gas) {
-    const LatticeParticles shifted = lagrangian_particles(delta, fine_params, 0.5);
+    const LatticeParticles shifted = lagrangian_particles(fields, fine_params, 0.5);
     const double kelvin_per_u = ideal_gas_kelvin_per_energy(units, 5.0 / 3.0, cosmology::kNeutralMeanMolecularWeight);
     const double u_comoving = p.a_start * p.a_start * cosmology::initial_gas_temperature(p.cosmology, p.a_start) / kelvin_per_u;
-    GasParticles& gas = out.gas;
+    IcGasParticles& gas = out.gas;
     for (int i = 0; i < nf; ++i)
       for (int j = 0; j < nf; ++j)
         for (int k = 0; k < nf; ++k) {
           if (!region[cell_index(np, i / r, j / r, k / r)]) continue;
           const std::size_t f = cell_index(nf, i, j, k);
-          const std::size_t g = gas.size();
-          gas.resize(g + 1);
-          gas.id[g] = 1 + f + (std::uint64_t{1} << 40);
-          gas.mass[g] = gas_fraction * m_fine;
-          gas.mass_initial[g] = gas.mass[g];
-          gas.x[g] = folded(shifted.x[f], p.box);
-          gas.v[g] = gas.v_full[g] = shifted.v[f];
-          gas.u[g] = gas.u_full[g] = u_comoving;
-          gas.h[g] = 0.0;
+          gas.push_back(1 + f + (std::uint64_t{1} << 40), gas_fraction * m_fine, folded(shifted.x[f], p.box), shifted.v[f],
+                        u_comoving, 0.0);
         }
   }
   // The parent level: the region's surroundings within two cells, and (with a coarsest level
@@ -189,7 +182,7 @@ CosmologicalBox make_zoom(const CosmologicalBoxParams& p, const ZoomLevels& leve
         const std::size_t c = cell_index(np, i, j, k);
         if (!at_parent[c]) continue;
         const Block b = block_mean(fine, lmax, lp, i, j, k, p.box);
-        dm.push_back(1 + c + (std::uint64_t{1} << 41), Species::LowResDarkMatter, block_mass_parent, b.x, b.v, b.v, 0.0, 0);
+        dm.push_back(1 + c + (std::uint64_t{1} << 41), Species::LowResDarkMatter, block_mass_parent, b.x, b.v);
       }
   if (l0 < lp) {
     const double block_mass_coarse = block_mass_parent * static_cast<double>(s) * s * s;
@@ -199,7 +192,7 @@ CosmologicalBox make_zoom(const CosmologicalBoxParams& p, const ZoomLevels& leve
           const std::size_t c = cell_index(n0, i, j, k);
           if (split[c]) continue;
           const Block b = block_mean(fine, lmax, l0, i, j, k, p.box);
-          dm.push_back(1 + c + (std::uint64_t{1} << 42), Species::LowResDarkMatter, block_mass_coarse, b.x, b.v, b.v, 0.0, 0);
+          dm.push_back(1 + c + (std::uint64_t{1} << 42), Species::LowResDarkMatter, block_mass_coarse, b.x, b.v);
         }
   }
   return out;
