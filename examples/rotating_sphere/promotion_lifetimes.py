@@ -67,8 +67,9 @@ def main():
     print("|---|---|---|---|---|---|---|")
     for run in a.runs:
         r = lifetime(run, a.t_from, a.t_to)
+        tau = f"{r['tau']:.2f}" if r["count"] > 0 else "- (no promotion)"
         print(f"| {r['run']} | {r['from']:.2f}-{r['to']:.2f} | {r['count']:,} | {r['per_myr']:.1f} | "
-              f"{r['diffuse']:.4f} | {r['tau']:.2f} | {r['total']:,} |")
+              f"{r['diffuse']:.4f} | {tau} | {r['total']:,} |")
     return 0
 
 
