@@ -5,21 +5,29 @@ report in their section 3.3, point by point, as a Markdown table (at the runs' l
     /usr/bin/python3 examples/rotating_sphere/compare_feedback.py examples/rotating_sphere/output/feedback_2000 [T_GYR]
 
 With T_GYR, every run is read at its last line at or before that time (runs of different
-lengths compare at a common time).
+lengths compare at a common time), and a run that stopped before it (at dt_min, say) is left
+out of the claims and named.
 """
 import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from plot_star_formation import read_statistics, summary  # noqa: E402
+from plot_star_formation import GYR_PER_TIME, read_statistics, summary  # noqa: E402
 
 
 def main(folder, at_gyr=None):
-    runs = {}
+    runs, short = {}, []
     for name in ("R01", "R02", "R03", "R04", "R05", "G09", "G10", "G11", "G12"):
         path = os.path.join(folder, name, "statistics.txt")
         if os.path.exists(path):
-            runs[name] = summary(read_statistics(path), at_gyr)
+            s = read_statistics(path)
+            end_gyr = s["time"][-1] * GYR_PER_TIME
+            if at_gyr is not None and end_gyr < 0.99 * at_gyr:
+                short.append(f"{name} (ends at {end_gyr:.2f} Gyr)")
+                continue
+            runs[name] = summary(s, at_gyr)
+    if short:
+        print(f"Left out, as they stopped before {at_gyr:g} Gyr: {', '.join(short)}.\n")
     rows = []
 
     def row(claim, ours, holds):
