@@ -6,6 +6,7 @@
 #
 #   sh examples/rotating_sphere/run_all.sh                  # the paper's settings
 #   MODE=fountain sh examples/rotating_sphere/run_all.sh    # Fountain's settings
+#   MODE=both sh examples/rotating_sphere/run_all.sh        # the paper's, then Fountain's
 #
 # MODE, H_MIN_RATIO, FOUNTAIN_BIN: as for run_convergence.sh and run_feedback.sh (their
 # folders, resuming and restart files too). The runs go JOBS at a time (default 2) on one
@@ -13,6 +14,12 @@
 # time of each part is appended to <output>/run_all_seconds.
 set -eu
 here=$(cd "$(dirname "$0")" && pwd)
+if [ "${MODE:-paper}" = both ]; then
+  status=0
+  MODE=paper sh "$0" || status=$?
+  MODE=fountain sh "$0" || status=$?
+  exit "$status"
+fi
 jobs=${JOBS:-2}
 t_end=${T_END:-1.0}
 export MODE="${MODE:-paper}"
