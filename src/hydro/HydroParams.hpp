@@ -21,8 +21,9 @@ struct HydroParams {
   double msph_A_prime = 10.0;
   double h_max = 0.0;  // 0: unlimited
   // Floor of h (internal length): hydro.h_min_ratio times the gas's spline softening length
-  // 2.8 eps_gas, as GADGET (the paper's code) sets it from MinGasHsmlFractional, so that a cold clump cannot shrink its kernel far below the scale on
-  // which its self-gravity is resolved. 0: none.
+  // 2.8 eps_gas, as GADGET (the paper's code) sets it from MinGasHsmlFractional, so that a cold
+  // clump cannot shrink its kernel far below the scale on which its self-gravity is resolved.
+  // 0: none.
   double h_min = 0.0;
   int max_h_iterations = 50;
   bool timestep_limiter = true;  // no particle's step more than 2^limiter_bins x a neighbour's
