@@ -18,19 +18,18 @@ import sys
 import h5py
 import numpy as np
 
-GYR_PER_TIME = 977.8  # internal time unit Mpc/h / (km/s) in Gyr, h = 1
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from plot_star_formation import GYR_PER_TIME  # noqa: E402
+from plot_star_formation import read_statistics as read_star_formation_statistics  # noqa: E402
+
 trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed it
 
 
 def read_statistics(path):
-    with open(path) as f:
-        names = [line for line in f if line.startswith("#")][-1].lstrip("#").split()
-    data = np.loadtxt(path, comments="#", ndmin=2)
-    if data.shape[1] != len(names):
-        raise SystemExit(f"{path}: {data.shape[1]} columns but the header names {len(names)}")
-    if "promotions" not in names:
+    s = read_star_formation_statistics(path)
+    if "promotions" not in s:
         raise SystemExit(f"{path}: no promotions column (written by an older Fountain)")
-    return {n: data[:, k] for k, n in enumerate(names)}
+    return s
 
 
 def lifetime(run, t_from, t_to):
