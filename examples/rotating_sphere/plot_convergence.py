@@ -64,19 +64,23 @@ def hot_halo(run):
     mass within 15 kpc/h (fraction of the gas) at the last output; number density per 1000
     (kpc/h)^3 in SHELLS_KPC, averaged over the last three outputs."""
     snaps = sorted(glob.glob(os.path.join(run, "snapshot_*.hdf5")))[-3:]
+    volume = 4.0 / 3.0 * np.pi * np.diff(np.power(SHELLS_KPC, 3))
     density = np.zeros(len(SHELLS_KPC) - 1)
+    times = []
     for path in snaps:
         x, rho, temp, m, t = gas_state(path)
+        times.append(t)
         hot = temp > 2 * T_STAR
         cold = ~hot & (rho > 0.1 * RHO_STAR_CGS)
         centre = np.average(x[cold], axis=0, weights=m[cold]) if cold.any() else np.zeros(3)
         r = np.linalg.norm(x - centre, axis=1) * 1e3
         counts, _ = np.histogram(r[hot], bins=SHELLS_KPC)
-        volume = 4.0 / 3.0 * np.pi * np.diff(np.power(SHELLS_KPC, 3))
         density += 1e3 * counts / volume / len(snaps)
-    within = [int(np.sum(hot & (r < R))) for R in (5, 10, 15, 20)]
-    hot_mass_15 = float(np.sum(m[hot & (r < 15)]) / np.sum(m))
-    return within, hot_mass_15, density, [gas_state(p)[4] for p in snaps]
+    # The counts and the mass are of the last output, the one the loop ended on.
+    last_hot, last_r, last_m = hot, r, m
+    within = [int(np.sum(last_hot & (last_r < R))) for R in (5, 10, 15, 20)]
+    hot_mass_15 = float(np.sum(last_m[last_hot & (last_r < 15)]) / np.sum(last_m))
+    return within, hot_mass_15, density, times
 
 
 def gas_state(path):
