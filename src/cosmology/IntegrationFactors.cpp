@@ -22,6 +22,9 @@ IntegrationFactors::IntegrationFactors(const Background& background, double gamm
     const Kind kind = static_cast<Kind>(k);
     auto& t = table_[static_cast<std::size_t>(k)];
     t.assign(static_cast<std::size_t>(intervals) + 1, 0.0);
+    auto& m = node_slope_[static_cast<std::size_t>(k)];
+    m.resize(static_cast<std::size_t>(intervals) + 1);
+    for (int i = 0; i <= intervals; ++i) m[static_cast<std::size_t>(i)] = slope(kind, std::exp(ln_begin_ + i * step_)) * step_;
     auto f = [&](double lna) { return slope(kind, std::exp(lna)); };
     for (int i = 0; i < intervals; ++i) {
       const double lo = ln_begin_ + i * step_, hi = ln_begin_ + (i + 1) * step_;
@@ -52,8 +55,8 @@ double IntegrationFactors::cumulative_at_ln(Kind k, double ln_a) const {
   const int i = std::clamp(static_cast<int>(std::floor(x)), 0, last);
   const double s = x - i;
   // Cubic Hermite on [i, i + 1] with the exact slopes at the nodes (per unit of x, so times step_).
-  const double a0 = std::exp(ln_begin_ + i * step_), a1 = std::exp(ln_begin_ + (i + 1) * step_);
-  const double m0 = slope(k, a0) * step_, m1 = slope(k, a1) * step_;
+  const auto& m = node_slope_[static_cast<std::size_t>(k)];
+  const double m0 = m[static_cast<std::size_t>(i)], m1 = m[static_cast<std::size_t>(i) + 1];
   const double p0 = t[static_cast<std::size_t>(i)], p1 = t[static_cast<std::size_t>(i) + 1];
   const double s2 = s * s, s3 = s2 * s;
   return (2.0 * s3 - 3.0 * s2 + 1.0) * p0 + (s3 - 2.0 * s2 + s) * m0 + (-2.0 * s3 + 3.0 * s2) * p1 +

@@ -43,6 +43,9 @@ class IntegrationFactors {
   const Background& background_;
   double gamma_, a_begin_, a_end_, ln_begin_, step_;
   std::array<std::vector<double>, 4> table_;
+  // The Hermite slopes at the nodes, slope(k, a_i) * step_: computed once, since every drift
+  // and kick reads two of them (an exp and a square root each).
+  std::array<std::vector<double>, 4> node_slope_;
 };
 
 }  // namespace fountain::cosmology

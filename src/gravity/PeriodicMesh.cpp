@@ -200,20 +200,31 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
   const int n = n_;
   const double cell_inv = n / box_;
   const double* phi = fft_->data;
-  // The fourth-order difference of the potential along axis d at node (i, j, k).
-  auto gradient = [&](int i, int j, int k, int d) {
-    auto at = [&](int shift) {
-      int ii = i, jj = j, kk = k;
-      (d == 0 ? ii : d == 1 ? jj : kk) += shift;
-      return phi[real_index(wrap_index(ii, n), wrap_index(jj, n), wrap_index(kk, n))];
-    };
-    return (8.0 * (at(1) - at(-1)) - (at(2) - at(-2))) * (cell_inv / 12.0);
-  };
+  // The fourth-order difference of the potential along each axis, once per node: each node
+  // is read by the clouds of many particles, and each cloud reads eight nodes' three.
+  const auto nodes = static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+  gradient_.resize(3 * nodes);
+  for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
+    const int i = static_cast<int>(plane);
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k) {
+        const std::size_t node = (static_cast<std::size_t>(i) * n + j) * n + k;
+        for (int d = 0; d < 3; ++d) {
+          auto at = [&](int shift) {
+            int ii = i, jj = j, kk = k;
+            (d == 0 ? ii : d == 1 ? jj : kk) += shift;
+            return phi[real_index(wrap_index(ii, n), wrap_index(jj, n), wrap_index(kk, n))];
+          };
+          gradient_[3 * node + static_cast<std::size_t>(d)] = (8.0 * (at(1) - at(-1)) - (at(2) - at(-2))) * (cell_inv / 12.0);
+        }
+      }
+  });
   for_each_particle(for_each, count, [&](std::size_t p) {
     Vec3 acc;
     double pot = 0.0;
     for_each_cloud_node(positions[p], box_, cell_inv, n, [&](int i, int j, int k, double weight) {
-      for (int d = 0; d < 3; ++d) acc[d] -= weight * gradient(i, j, k, d);
+      const double* g = &gradient_[3 * ((static_cast<std::size_t>(i) * n + j) * n + k)];
+      for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
       pot += weight * phi[real_index(i, j, k)];
     });
     acceleration[p] = acc;

@@ -56,6 +56,7 @@ class PeriodicMesh {
   double box_, r_s_, G_;
   double fixed_unit_ = 1.0;  // mass of one fixed-point unit
   std::vector<std::int64_t> fixed_;
+  std::vector<double> gradient_;  // the potential's mesh gradient, three per node
   struct Fft;
   std::unique_ptr<Fft> fft_;
 };
