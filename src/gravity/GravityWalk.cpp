@@ -65,14 +65,27 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   const double slack = 1e-12 * (nodes_[0].side + std::fabs(nodes_[0].centre.x) + std::fabs(nodes_[0].centre.y) +
                                 std::fabs(nodes_[0].centre.z));
   // Each of a node's particles, tested alone.
+  // Written to both lists' ends and kept by advancing one end or neither, without branches:
+  // in TreePM about half the particles of an opened node lie beyond the cut-off, a branch no
+  // predictor learns.
+  const double cutoff2 = config.split.enabled() ? cutoff * cutoff : std::numeric_limits<double>::infinity();
   auto add_particles = [&](const TreeNode& node) {
+    std::size_t f = list.far.size(), m = list.near.size();
+    list.far.resize(f + static_cast<std::size_t>(node.count));
+    list.near.resize(m + static_cast<std::size_t>(node.count));
     for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
       const double hp = std::max(g.h_max, spline_[k]);
       const double d2 = box_distance2(g, pos_[k]);
-      if (config.split.enabled() && d2 > cutoff * cutoff) continue;
+      const bool keep = d2 <= cutoff2;
       // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
-      (d2 > 0.0 && d2 >= hp * hp ? list.far : list.near).push_back(k);
+      const bool far = d2 > 0.0 && d2 >= hp * hp;
+      list.far[f] = k;
+      list.near[m] = k;
+      f += static_cast<std::size_t>(keep & far);
+      m += static_cast<std::size_t>(keep & !far);
     }
+    list.far.resize(f);
+    list.near.resize(m);
   };
   std::int32_t n = 0;
   while (n >= 0) {
