@@ -138,19 +138,11 @@ void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const doubl
   });
 }
 
-// Density -> potential, in place in the FFT buffer.
-void PeriodicMesh::solve() {
+// The Green's function per mode of the r2c layout, with the FFT's normalisation: it depends
+// only on the mesh, so it is computed once rather than in every solve (an exp per mode).
+std::vector<double> PeriodicMesh::green_function() const {
   const int n = n_;
   const double cell = box_ / n;
-  const double density_unit = fixed_unit_ / (cell * cell * cell);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k)
-        fft_->data[real_index(i, j, k)] =
-            static_cast<double>(fixed_[(static_cast<std::size_t>(i) * n + j) * n + k]) * density_unit;
-  fftw_execute(fft_->forward);
-
-  auto* rho_k = reinterpret_cast<fftw_complex*>(fft_->data);
   const int nk = n / 2 + 1;
   const double k_unit = 2.0 * std::numbers::pi / box_;
   const double norm = 1.0 / (static_cast<double>(n) * n * n);
@@ -163,12 +155,14 @@ void PeriodicMesh::solve() {
     const double sinc = m == 0 ? 1.0 : std::sin(y) / y;
     window[static_cast<std::size_t>(i)] = sinc * sinc;
   }
+  std::vector<double> green(static_cast<std::size_t>(n) * n * nk);
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < nk; ++k) {
-        fftw_complex& c = rho_k[(static_cast<std::size_t>(i) * n + j) * nk + k];
+        double& g = green[(static_cast<std::size_t>(i) * n + j) * nk + k];
+        // The Nyquist planes and the mean are zeroed.
         if (i == n / 2 || j == n / 2 || k == n / 2 || (i == 0 && j == 0 && k == 0)) {
-          c[0] = c[1] = 0.0;
+          g = 0.0;
           continue;
         }
         const double kx = kd[static_cast<std::size_t>(i)], ky = kd[static_cast<std::size_t>(j)],
@@ -176,10 +170,38 @@ void PeriodicMesh::solve() {
         const double k2 = kx * kx + ky * ky + kz * kz;
         const double w = window[static_cast<std::size_t>(i)] * window[static_cast<std::size_t>(j)] *
                          window[static_cast<std::size_t>(k)];
-        const double green = -4.0 * std::numbers::pi * G_ * std::exp(-k2 * r_s_ * r_s_) / (k2 * w * w) * norm;
-        c[0] *= green;
-        c[1] *= green;
+        g = -4.0 * std::numbers::pi * G_ * std::exp(-k2 * r_s_ * r_s_) / (k2 * w * w) * norm;
       }
+  return green;
+}
+
+// Density -> potential, in place in the FFT buffer.
+void PeriodicMesh::solve(const ForEach& for_each) {
+  const int n = n_;
+  const double cell = box_ / n;
+  const double density_unit = fixed_unit_ / (cell * cell * cell);
+  // The loops over planes go in parallel (each node's arithmetic is its own, so the bits are
+  // the same); the transforms stay serial, as FFTW's threaded plans may round differently with
+  // the thread count.
+  for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
+    const int i = static_cast<int>(plane);
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+        fft_->data[real_index(i, j, k)] =
+            static_cast<double>(fixed_[(static_cast<std::size_t>(i) * n + j) * n + k]) * density_unit;
+  });
+  fftw_execute(fft_->forward);
+
+  auto* rho_k = reinterpret_cast<fftw_complex*>(fft_->data);
+  const int nk = n / 2 + 1;
+  if (green_.empty()) green_ = green_function();
+  for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
+    const std::size_t row = plane * static_cast<std::size_t>(n) * nk;
+    for (std::size_t m = row; m < row + static_cast<std::size_t>(n) * nk; ++m) {
+      rho_k[m][0] *= green_[m];
+      rho_k[m][1] *= green_[m];
+    }
+  });
   fftw_execute(fft_->backward);
 }
 
@@ -189,7 +211,7 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
   if (masses.size() != count || acceleration.size() != count || potential.size() != count)
     throw std::invalid_argument("PeriodicMesh::compute: positions, masses and outputs differ in length");
   assign(positions, masses, for_each);
-  solve();
+  solve(for_each);
 
   double total_mass = 0.0;
   for (const std::int64_t f : fixed_) total_mass += static_cast<double>(f);

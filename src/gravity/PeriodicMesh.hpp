@@ -49,13 +49,15 @@ class PeriodicMesh {
 
  private:
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
-  void solve();
+  void solve(const ForEach& for_each);
+  std::vector<double> green_function() const;
   std::size_t real_index(int i, int j, int k) const;
 
   int n_;
   double box_, r_s_, G_;
   double fixed_unit_ = 1.0;  // mass of one fixed-point unit
   std::vector<std::int64_t> fixed_;
+  std::vector<double> green_;     // per mode of the r2c layout (green_function)
   std::vector<double> gradient_;  // the potential's mesh gradient, three per node
   struct Fft;
   std::unique_ptr<Fft> fft_;
