@@ -137,8 +137,23 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     } else if (config.split.enabled()) {
       // TreePM: a leaf, or a small node (the short range at high redshift opens nearly every
       // node within the cut-off down to its leaves; its particles are listed at once, each
-      // exact). Each particle is tested, for the cut-off drops those beyond it from the box.
-      add_particles(node);
+      // exact). A node whose farthest point lies within the cut-off of the box, and which is
+      // wholly near or wholly far, is listed whole; otherwise each particle is tested.
+      const double half = 0.5 * node.side;
+      // The farthest a point of the node's cube lies from the box, per axis.
+      const double fx = gap(ox, g.half.x - half), fy = gap(oy, g.half.y - half), fz = gap(oz, g.half.z - half);
+      const double reach2 = fx * fx + fy * fy + fz * fz;
+      const Bulk bulk = std::sqrt(reach2) + slack <= cutoff
+                            ? classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack)
+                            : Bulk::mixed;
+      if (bulk != Bulk::mixed) {
+        auto& to = bulk == Bulk::far ? list.far : list.near;
+        const std::size_t at = to.size();
+        to.resize(at + static_cast<std::size_t>(node.count));
+        std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
+      } else {
+        add_particles(node);
+      }
       n = node.next;
     } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
       // Decided for the whole leaf, so its particles need no test of their own.
