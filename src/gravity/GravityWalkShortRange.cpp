@@ -8,6 +8,7 @@
 #include "core/VectorClones.hpp"
 #include "gravity/GravityTree.hpp"
 #include "gravity/GravityWalkGroup.hpp"
+#include "gravity/SourceSelection.hpp"
 
 namespace fountain::gravity {
 
@@ -15,13 +16,16 @@ namespace {
 
 // Sources per step of a target's particle loops (AVX2's float width).
 constexpr int kSourceLanes = 8;
+// Room past the kept sources: the padding to whole steps, or a whole register of sixteen
+// floats stored at the end of the list.
+constexpr int kKeptSlack = 16;
 
 // One group's particle sources in its float frame (nearest images taken once per group), and
 // one target's sources within the cut-off. A sentinel of no mass after the sources pads the
 // kept list to whole steps of kSourceLanes.
 struct ParticleSources {
   std::vector<float> x, y, z, gm, h, h_inv, key_hi, key_lo;
-  std::vector<std::int32_t> kept;
+  std::vector<std::int32_t> kept;  // scratch of the portable selection
   std::vector<float> r2;
   // The kept sources' fields, contiguous so that the pair loops vectorise.
   std::vector<float> kx, ky, kz, kgm, kh, kh_inv, kkey_hi, kkey_lo;
@@ -32,8 +36,7 @@ struct ParticleSources {
     count = static_cast<int>(list.size());
     const std::size_t n = list.size() + 1;
     for (auto* v : {&x, &y, &z, &gm, &h, &h_inv, &key_hi, &key_lo}) v->resize(n);
-    kept.resize(list.size() + kSourceLanes);
-    for (auto* v : {&kx, &ky, &kz, &kgm, &kh, &kh_inv, &kkey_hi, &kkey_lo}) v->resize(list.size() + kSourceLanes);
+    for (auto* v : {&kx, &ky, &kz, &kgm, &kh, &kh_inv, &kkey_hi, &kkey_lo}) v->resize(list.size() + kKeptSlack);
     for (std::size_t i = 0; i < list.size(); ++i) source(list[i], i);
     gm[list.size()] = 0.0f;
     h[list.size()] = 0.0f;
@@ -48,37 +51,17 @@ struct ParticleSources {
   // count. kept_count is the unpadded one.
   // With `softened`, the fields of the softened pairs (h, 1/h, index keys) are kept too.
   int keep_within(float xt, float yt, float zt, float r_cut2, float away, bool softened) {
-    x[static_cast<std::size_t>(count)] = xt + away;
-    y[static_cast<std::size_t>(count)] = yt;
-    z[static_cast<std::size_t>(count)] = zt;
-    // Squared distances first (a loop that vectorises), then the branch-free compaction.
-    r2.resize(static_cast<std::size_t>(count));
-    for (std::size_t k = 0; k < static_cast<std::size_t>(count); ++k) {
-      const float dx = xt - x[k], dy = yt - y[k], dz = zt - z[k];
-      r2[k] = dx * dx + dy * dy + dz * dz;
-    }
-    int m = 0;
-    for (int k = 0; k < count; ++k) {
-      kept[static_cast<std::size_t>(m)] = k;
-      m += r2[static_cast<std::size_t>(k)] < r_cut2 ? 1 : 0;
-    }
+    const auto sentinel = static_cast<std::size_t>(count);
+    x[sentinel] = xt + away;
+    y[sentinel] = yt;
+    z[sentinel] = zt;
+    const float* in[] = {x.data(), y.data(), z.data(), gm.data(), h.data(), h_inv.data(), key_hi.data(), key_lo.data()};
+    float* out[] = {kx.data(), ky.data(), kz.data(), kgm.data(), kh.data(), kh_inv.data(), kkey_hi.data(), kkey_lo.data()};
+    const int fields = softened ? 8 : 4;
+    int m = select_within(SourceFields{in, out, fields, count}, xt, yt, zt, r_cut2, r2, kept);
     kept_count = m;
-    while (m % kSourceLanes != 0) kept[static_cast<std::size_t>(m++)] = count;
-    for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) {
-      const auto k = static_cast<std::size_t>(kept[i]);
-      kx[i] = x[k];
-      ky[i] = y[k];
-      kz[i] = z[k];
-      kgm[i] = gm[k];
-    }
-    if (softened)
-      for (std::size_t i = 0; i < static_cast<std::size_t>(m); ++i) {
-        const auto k = static_cast<std::size_t>(kept[i]);
-        kh[i] = h[k];
-        kh_inv[i] = h_inv[k];
-        kkey_hi[i] = key_hi[k];
-        kkey_lo[i] = key_lo[k];
-      }
+    for (; m % kSourceLanes != 0; ++m)
+      for (int f = 0; f < fields; ++f) out[f][m] = in[f][sentinel];
     return m;
   }
 };

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/CpuFeatures.hpp"
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -115,11 +117,7 @@ __attribute__((target("avx512f,avx512vl"))) std::size_t scan_near_box_avx512(
   return m;
 }
 
-// Dynamic initialisation may run before the library's own CPU detection: ask for it first.
-const bool kHasAvx512 = [] {
-  __builtin_cpu_init();
-  return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
-}();
+const bool kHasAvx512 = cpu_has_avx512();
 
 }  // namespace
 
