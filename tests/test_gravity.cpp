@@ -857,7 +857,7 @@ TEST(GravityTree, FloatLoopsHoldInAnyUnitOfLength) {
 // Accuracy against direct summation
 
 // The target set for this module is median < 1e-3 and 99th percentile < 1e-2 at the default
-// alpha_force = 0.01. Targets are walked in groups of up to 16 (GravityTree::kGroupSize)
+// alpha_force = 0.01. Targets are walked in groups of up to 16 (GravityTree::group_size)
 // whose opening tests hold for every point of the group's box, so each target's list is at
 // least as strict as its own criterion would make it (docs/gravity.md, "Grouped walk").
 // Walked one by one, the same criteria gave medians of 1.75e-3 to 2.5e-3 at 0.01: each

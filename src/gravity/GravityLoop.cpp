@@ -124,7 +124,7 @@ void walk_cell(StepContext& ctx, int c) {
   }
   std::vector<GravityResult> results(targets.size());
   // More than two groups: idle threads may take some.
-  const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::kGroupSize);
+  const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::group_size(config));
   ctx.tree->accelerate(targets, config, results, split ? ctx.in_task_for_each : ForEach{});
   std::size_t k = 0;
   for (const std::size_t i : gas_targets) {

@@ -443,9 +443,10 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
   // at most (L/2 - r_cut)/2; the rare wider group (a sparse set) is walked target by target.
   const double widest_half =
       config_.periodic ? 0.5 * (0.5 * config_.box_size - config.split.cutoff_radius()) : 0.0;
+  const auto group_targets = static_cast<std::size_t>(group_size(config));
   auto walk_and_evaluate = [&](std::size_t group) {
-    const std::size_t begin = group * kGroupSize;
-    const std::size_t count = std::min<std::size_t>(kGroupSize, order.size() - begin);
+    const std::size_t begin = group * group_targets;
+    const std::size_t count = std::min<std::size_t>(group_targets, order.size() - begin);
     if (config_.periodic && count > 1) {
       Vec3 lo = targets[order[begin]].position, hi = lo;
       for (std::size_t t = 1; t < count; ++t)
@@ -460,7 +461,7 @@ void GravityTree::accelerate(std::span<const GravityTarget> targets, const WalkC
     }
     walk_and_evaluate_targets(begin, count);
   };
-  for_each_or_serial(for_each, (order.size() + kGroupSize - 1) / kGroupSize, walk_and_evaluate);
+  for_each_or_serial(for_each, (order.size() + group_targets - 1) / group_targets, walk_and_evaluate);
 }
 
 }  // namespace fountain::gravity
