@@ -64,10 +64,9 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   // Above the rounding of any gap computed inside the root cube.
   const double slack = 1e-12 * (nodes_[0].side + std::fabs(nodes_[0].centre.x) + std::fabs(nodes_[0].centre.y) +
                                 std::fabs(nodes_[0].centre.z));
-  // Each of a node's particles, tested alone.
-  // Written to both lists' ends and kept by advancing one end or neither, without branches:
-  // in TreePM about half the particles of an opened node lie beyond the cut-off, a branch no
-  // predictor learns.
+  // Each of a node's particles, tested alone: written to both lists' ends and kept by advancing
+  // one end or neither, without branches (in TreePM about half the particles of an opened node
+  // lie beyond the cut-off, a branch no predictor learns).
   const double cutoff2 = config.split.enabled() ? cutoff * cutoff : std::numeric_limits<double>::infinity();
   auto add_particles = [&](const TreeNode& node) {
     std::size_t f = list.far.size(), m = list.near.size();
@@ -86,6 +85,13 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     }
     list.far.resize(f);
     list.near.resize(m);
+  };
+  // All of a node's particles, decided for the whole node (Bulk::near or Bulk::far).
+  auto add_whole = [&](const TreeNode& node, Bulk bulk) {
+    auto& to = bulk == Bulk::far ? list.far : list.near;
+    const std::size_t at = to.size();
+    to.resize(at + static_cast<std::size_t>(node.count));
+    std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
   };
   std::int32_t n = 0;
   while (n >= 0) {
@@ -146,21 +152,14 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
       const Bulk bulk = std::sqrt(reach2) + slack <= cutoff
                             ? classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack)
                             : Bulk::mixed;
-      if (bulk != Bulk::mixed) {
-        auto& to = bulk == Bulk::far ? list.far : list.near;
-        const std::size_t at = to.size();
-        to.resize(at + static_cast<std::size_t>(node.count));
-        std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
-      } else {
+      if (bulk != Bulk::mixed)
+        add_whole(node, bulk);
+      else
         add_particles(node);
-      }
       n = node.next;
     } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
       // Decided for the whole leaf, so its particles need no test of their own.
-      auto& to = bulk == Bulk::far ? list.far : list.near;
-      const std::size_t at = to.size();
-      to.resize(at + static_cast<std::size_t>(node.count));
-      std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
+      add_whole(node, bulk);
       n = node.next;
     } else {
       add_particles(node);

@@ -91,6 +91,7 @@ PeriodicMesh::PeriodicMesh(int cells, double box, double r_s, double G)
   const std::size_t reals = n * n * 2 * (n / 2 + 1);
   fft_->data = static_cast<double*>(fftw_malloc(sizeof(double) * reals));
   if (!fft_->data) throw std::bad_alloc();
+  green_ = green_function();
   std::lock_guard<std::mutex> lock(planner_mutex());
   auto* complex = reinterpret_cast<fftw_complex*>(fft_->data);
   fft_->forward = fftw_plan_dft_r2c_3d(n_, n_, n_, fft_->data, complex, FFTW_ESTIMATE);
@@ -139,7 +140,8 @@ void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const doubl
 }
 
 // The Green's function per mode of the r2c layout, with the FFT's normalisation: it depends
-// only on the mesh, so it is computed once rather than in every solve (an exp per mode).
+// only on the mesh, so the constructor computes it once rather than every solve (an exp per
+// mode).
 std::vector<double> PeriodicMesh::green_function() const {
   const int n = n_;
   const double cell = box_ / n;
@@ -194,7 +196,6 @@ void PeriodicMesh::solve(const ForEach& for_each) {
 
   auto* rho_k = reinterpret_cast<fftw_complex*>(fft_->data);
   const int nk = n / 2 + 1;
-  if (green_.empty()) green_ = green_function();
   for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
     const std::size_t row = plane * static_cast<std::size_t>(n) * nk;
     for (std::size_t m = row; m < row + static_cast<std::size_t>(n) * nk; ++m) {
