@@ -248,7 +248,7 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     # velocity convention and 1e10 Msun/h mass unit) at z = 49, periodic TreePM, to a = 0.03
     # with snapshots at the listed redshifts. _yt: yt opens the snapshots as a cosmological data
     # set at their redshift with the header's cosmology and the gas and dark matter masses.
-    # _bitwise: 1 and 2 threads and 2 ranks give the same bits. _restart: a run stopped
+    # _bitwise: 1 and 2 threads and 2, 3 and 4 ranks give the same bits. _restart: a run stopped
     # half-way and restarted ends as the uninterrupted one, bit for bit.
     cp "$root/tests/data/music/zoom_gadget2.dat" music.dat
     cparams() {  # cparams OUT_DIR [extra yaml]
@@ -293,10 +293,19 @@ with h5py.File('out/snapshot_0003.hdf5', 'r') as f:
       comoving_music_bitwise)
         cparams out1; "$bin" run params.yml -q -t 1 > run1.txt 2>&1 || { cat run1.txt; fail "1-thread run"; }
         cparams out2; "$bin" run params.yml -q -t 2 > run2.txt 2>&1 || { cat run2.txt; fail "2-thread run"; }
-        cparams outr; ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params.yml -q -t 1 \
-          > runr.txt 2>&1 || { cat runr.txt; fail "2-rank run"; }
         "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0003.hdf5 out2/snapshot_0003.hdf5
-        "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0003.hdf5 outr/snapshot_0003.hdf5 ;;
+        # Across ranks the mesh is shared as FFTW's slabs: rank 0 holds ceil(N / ranks) of its N
+        # planes, and the run still gives one rank's bits (3 ranks leave the last a short slab).
+        for n in 2 3 4; do
+          cparams "outr$n"; ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$n" "$bin" run params.yml -q -t 1 \
+            > "runr$n.txt" 2>&1 || { cat "runr$n.txt"; fail "$n-rank run"; }
+          "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0003.hdf5 "outr$n/snapshot_0003.hdf5"
+          line=$(grep "^mesh: " "runr$n.txt") || { cat "runr$n.txt"; fail "no mesh line from the $n-rank run"; }
+          cells=$(echo "$line" | sed -n 's/^mesh: \([0-9]*\)^3 in '"$n"' slabs; rank 0 held \([0-9]*\) planes.*/\1/p')
+          planes=$(echo "$line" | sed -n 's/^mesh: \([0-9]*\)^3 in '"$n"' slabs; rank 0 held \([0-9]*\) planes.*/\2/p')
+          [ -n "$cells" ] && [ "$planes" -eq $(( (cells + n - 1) / n )) ] || fail "rank 0 of $n held the wrong planes: $line"
+          echo "$n ranks: $line"
+        done ;;
       comoving_music_restart)
         cparams outA; cp params.yml paramsA.yml
         cparams outB "restart:
@@ -310,8 +319,9 @@ with h5py.File('out/snapshot_0003.hdf5', 'r') as f:
   comoving_galaxy_bitwise|comoving_galaxy_restart)
     # A small cosmological box (2 x 16^3 in 2 Mpc/h, z = 49) with everything a galaxy run
     # has: cooling, star formation, MSPH and multiphase feedback, to a = 0.16, by which time
-    # stars have been spawned and reservoirs promoted. _bitwise: 1 and 2 threads give the same
-    # bits; _restart: a run stopped half-way and restarted ends as the uninterrupted one.
+    # stars have been spawned and reservoirs promoted. _bitwise: 1 and 2 threads and 2 ranks
+    # give the same bits; _restart: a run stopped half-way and restarted ends as the
+    # uninterrupted one.
     "$bin" ic cosmo -n 16 --box 2 --omega-b 0.03 --hubble 0.6 --seed 3 -o box.hdf5 > ic.txt 2>&1 || { cat ic.txt; fail "ic cosmo"; }
     gparams() {  # gparams OUT_DIR [extra yaml]
       cat > params.yml <<EOT
@@ -358,6 +368,10 @@ with h5py.File('outA/snapshot_0002.hdf5', 'r') as f:
     if [ "$case_name" = comoving_galaxy_bitwise ]; then
       gparams out1; "$bin" run params.yml -q -t 1 > run1.txt 2>&1 || { cat run1.txt; fail "1-thread run"; }
       "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0002.hdf5 out1/snapshot_0002.hdf5
+      # On 2 ranks (the mesh in slabs, its messages ordered with star formation's).
+      gparams outr; ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params.yml -q -t 1 \
+        > runr.txt 2>&1 || { cat runr.txt; fail "2-rank run"; }
+      "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0002.hdf5 outr/snapshot_0002.hdf5
       # The catalogues written beside the snapshots (output.fof_groups, output.hop_groups).
       "$python" - <<'EOT' || fail "the in-run catalogues differ or are empty"
 import h5py, numpy as np, sys

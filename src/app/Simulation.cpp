@@ -148,6 +148,10 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   summary.exchange_s = engine.exchange_seconds();
   summary.halo_mode = engine.halo_mode();
   summary.held_share = engine.held_share();
+  const Engine::MeshShare mesh = engine.mesh_share();
+  summary.mesh_cells = mesh.cells;
+  summary.mesh_planes = mesh.planes;
+  summary.mesh_bytes = mesh.bytes;
   summary.h_max_capped = engine.h_max_capped();
   summary.h_min_held = engine.h_min_held();
   summary.msph_decoupled = engine.msph_decoupled();

@@ -26,6 +26,8 @@ struct RunSummary {
   double graph_s = 0.0, exchange_s = 0.0;  // this rank: in task graphs, in the exchanges after them
   bool halo_mode = false;
   double held_share = 1.0;  // of the leaves, kept current by this rank (Engine::held_share)
+  int mesh_cells = 0, mesh_planes = 0;  // the periodic mesh's side, and this rank's x-planes of it
+  std::size_t mesh_bytes = 0;           // of the mesh, held by this rank
   long long h_max_capped = 0;  // particle-steps held at hydro.h_max short of neighbours
   long long h_min_held = 0;    // particle-steps held at the floor of h (hydro.h_min_ratio)
   long long msph_decoupled = 0;  // force interactions the MSPH rule dropped

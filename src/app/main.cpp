@@ -211,6 +211,9 @@ int main(int argc, char** argv) {
                    "task graphs and {:.2f} s in the exchanges after them\n",
                    s.ranks, s.partitions, 1e-6 * static_cast<double>(s.bytes_sent), s.messages_sent, s.graph_s,
                    s.exchange_s);
+      if (mpi.rank() == 0 && s.mesh_cells > 0)
+        fmt::print(stderr, "mesh: {}^3 in {} slabs; rank 0 held {} planes, {:.3g} MB\n", s.mesh_cells, s.ranks,
+                   s.mesh_planes, 1e-6 * static_cast<double>(s.mesh_bytes));
       if (mpi.rank() == 0 && s.halo_mode)
         fmt::print(stderr, "halo mode: rank 0 kept {:.1f}% of the leaves current (mean over the recuts)\n",
                    100.0 * s.held_share);

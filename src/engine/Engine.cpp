@@ -191,6 +191,12 @@ void Engine::plan_mesh_step() {
 
 Engine::MeshStepState Engine::mesh_step() const { return {ctx_->mesh_step.bin, ctx_->mesh_step.ti_begin}; }
 
+Engine::MeshShare Engine::mesh_share() const {
+  if (!ctx_->long_range) return {};
+  const gravity::PeriodicMesh& mesh = ctx_->long_range->mesh;
+  return {mesh.cells(), mesh.planes(), mesh.bytes()};
+}
+
 // TreePM in a periodic box (docs/gravity.md, "Periodic TreePM"): the mesh is a cube over the
 // box, so the box must be one.
 void Engine::setup_periodic_gravity() {
@@ -205,13 +211,16 @@ void Engine::setup_periodic_gravity() {
     throw InputError(fmt::format("gravity.split_cells = {} with {} mesh cells puts the short-range cut-off (4.5 r_s = "
                                  "{}) beyond half the box ({}): use more cells or a smaller split",
                                  config_.gravity.split_cells, cells, 4.5 * r_s, 0.5 * box.x));
-  ctx_->long_range = std::make_unique<gravity::LongRangeForce>(cells, box.x, r_s, config_.gravity.G);
+  // Across ranks each holds a slab of the mesh's planes (collective: every rank is here).
+  ctx_->long_range = std::make_unique<gravity::LongRangeForce>(cells, box.x, r_s, config_.gravity.G,
+                                                               ranks_ ? gravity::MeshSlabs::world(cells) : nullptr);
 }
 
 void Engine::register_tasks() {
   const integration::IntegrationTaskTypes step = integration::register_tasks(tasks_, *ctx_);
   const hydro::HydroTaskTypes sph = hydro::register_tasks(tasks_, *ctx_, step.drift, step.kick_close);
-  if (config_.gravity.enabled) gravity::register_tasks(tasks_, *ctx_, step.drift);
+  gravity::GravityTaskTypes gravity_types;
+  if (config_.gravity.enabled) gravity_types = gravity::register_tasks(tasks_, *ctx_, step.drift);
   if (cooling_) cooling::register_tasks(tasks_, *ctx_);
   int star_formation_done = -1;
   if (sf_) {
@@ -219,6 +228,13 @@ void Engine::register_tasks() {
     const auto feedback = feedback::register_tasks(tasks_, *ctx_, *fb_, formation.done);
     star_formation_done = formation.done;
     if (ranks_) add_feedback_exchanges(formation.done, feedback.apply);
+  }
+  if (ranks_ && gravity_types.mesh >= 0 && star_formation_done >= 0) {
+    // The mesh's messages and the end of star formation's are collectives: every rank must
+    // reach them in the same order, or each could wait in one for the other.
+    tasks_.link([mesh = gravity_types.mesh, done = star_formation_done](GraphBuilder& g) {
+      g.depends(g.step_tasks(mesh).front(), g.step_tasks(done).front());
+    });
   }
   if (ranks_) register_exchange_tasks(step.drift, step.kick_close, sph.ghost, sph.force, star_formation_done);
 }

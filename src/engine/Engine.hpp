@@ -176,6 +176,12 @@ class Engine {
   // In halo mode, the share of the leaves this rank kept current, averaged over the recuts
   // (1 otherwise): below 1, it held stale copies of the rest.
   double held_share() const { return layout_.held_share(); }
+  // The periodic mesh's side and this rank's share of it: planes and bytes (0 without one).
+  struct MeshShare {
+    int cells = 0, planes = 0;
+    std::size_t bytes = 0;
+  };
+  MeshShare mesh_share() const;
   // Brings every particle on every rank up to date with its owner's copy (collective: every
   // rank calls it at the same point). drift_all() calls it; so must anything that reads the
   // whole state between steps across ranks (restart files, statistics). Free when alone, and

@@ -2,6 +2,7 @@
 #pragma once
 #include <cmath>
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -16,7 +17,9 @@ struct LongRangeForce {
   std::vector<Vec3> acceleration;
   std::vector<double> potential;
 
-  LongRangeForce(int cells, double box, double r_s, double G) : mesh(cells, box, r_s, G) {}
+  // slabs: the ranks that share the mesh (null: this process holds all of it).
+  LongRangeForce(int cells, double box, double r_s, double G, std::unique_ptr<MeshSlabs> slabs = nullptr)
+      : mesh(cells, box, r_s, G, std::move(slabs)) {}
 
   // The mesh a run of `particles` in a box of side `box` uses: `cells` when set, otherwise
   // the smallest power of two at least the particles per side (and at least 16, so that the

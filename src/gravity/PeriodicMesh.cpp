@@ -14,12 +14,6 @@ namespace fountain::gravity {
 
 namespace {
 
-// FFTW's planner is not thread-safe; its executors are.
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
-
 int wrap_index(int i, int n) { return ((i % n) + n) % n; }
 
 // A particle's cloud-in-cell cell and weights along one axis: nodes lo and lo + 1 (mod N).
@@ -37,12 +31,21 @@ AxisWeights axis_weights(double x, double cell_inv, int n) {
   return a;
 }
 
-// fn(i, j, k, weight) for the eight nodes of position x's cloud (x folded into [0, box)):
-// assignment and interpolation share it, so a particle reads back exactly the weights it gave.
+// The cloud of position x (folded into [0, box)): its lowest node and weights per axis.
+struct Cloud {
+  AxisWeights w[3];
+};
+Cloud cloud_of(const Vec3& x, double box, double cell_inv, int n) {
+  Cloud c{};
+  for (int d = 0; d < 3; ++d) c.w[d] = axis_weights(x[d] - box * std::floor(x[d] / box), cell_inv, n);
+  return c;
+}
+
+// fn(i, j, k, weight) for the eight nodes of a cloud: assignment and interpolation share it,
+// so a particle reads back exactly the weights it gave.
 template <class Fn>
-void for_each_cloud_node(const Vec3& x, double box, double cell_inv, int n, Fn&& fn) {
-  AxisWeights w[3]{};
-  for (int d = 0; d < 3; ++d) w[d] = axis_weights(x[d] - box * std::floor(x[d] / box), cell_inv, n);
+void for_each_cloud_node(const Cloud& cloud, int n, Fn&& fn) {
+  const AxisWeights* w = cloud.w;
   for (int corner = 0; corner < 8; ++corner) {
     const int i = (corner & 1) ? (w[0].lo + 1) % n : w[0].lo;
     const int j = (corner & 2) ? (w[1].lo + 1) % n : w[1].lo;
@@ -63,21 +66,30 @@ void for_each_particle(const ForEach& for_each, std::size_t count, Fn&& fn) {
   });
 }
 
+// The x-planes around a rank's own that the gradient (two each side) and the interpolation
+// (one more above) read.
+constexpr int kGhostBefore = 2;
+constexpr int kGhostAfter = 3;
+
 }  // namespace
 
 struct PeriodicMesh::Fft {
-  double* data = nullptr;  // N x N x 2 (N/2 + 1) reals, the in-place r2c layout
-  fftw_plan forward = nullptr, backward = nullptr;
+  double* planes = nullptr;   // x-planes, kGhostBefore + own + kGhostAfter, each N rows of 2 (N/2 + 1) reals
+  double* columns = nullptr;  // the transform's y-planes, each N rows (x) of N/2 + 1 complex values (z)
+  std::size_t planes_doubles = 0, columns_doubles = 0;
+  fftw_plan plane_forward = nullptr, plane_backward = nullptr;  // 2D, real <-> complex, in place
+  fftw_plan line_forward = nullptr, line_backward = nullptr;    // 1D along x for a whole y-plane
   ~Fft() {
-    std::lock_guard<std::mutex> lock(planner_mutex());
-    if (forward) fftw_destroy_plan(forward);
-    if (backward) fftw_destroy_plan(backward);
-    fftw_free(data);
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
+    for (fftw_plan p : {plane_forward, plane_backward, line_forward, line_backward})
+      if (p) fftw_destroy_plan(p);
+    fftw_free(planes);
+    fftw_free(columns);
   }
 };
 
-PeriodicMesh::PeriodicMesh(int cells, double box, double r_s, double G)
-    : n_(cells), box_(box), r_s_(r_s), G_(G), fft_(std::make_unique<Fft>()) {
+PeriodicMesh::PeriodicMesh(int cells, double box, double r_s, double G, std::unique_ptr<MeshSlabs> slabs)
+    : n_(cells), box_(box), r_s_(r_s), G_(G), slabs_(std::move(slabs)), fft_(std::make_unique<Fft>()) {
   if (cells < 8 || cells % 2 != 0 || cells > 4096)
     throw std::invalid_argument("PeriodicMesh: cells per side must be even and in [8, 4096], got " +
                                 std::to_string(cells));
@@ -86,29 +98,58 @@ PeriodicMesh::PeriodicMesh(int cells, double box, double r_s, double G)
   if (!(r_s > 0.0) || !(G > 0.0)) throw std::invalid_argument("PeriodicMesh: r_s and G must be positive");
   if (GravitySplit{r_s}.cutoff_radius() >= 0.5 * box)
     throw std::invalid_argument("PeriodicMesh: the short-range cut-off 4.5 r_s must be below half the box");
+  x0_ = slabs_ ? slabs_->first_plane(slabs_->rank()) : 0;
+  nx_ = slabs_ ? slabs_->planes(slabs_->rank()) : n_;
   const std::size_t n = static_cast<std::size_t>(n_);
-  fixed_.assign(n * n * n, 0);
-  const std::size_t reals = n * n * 2 * (n / 2 + 1);
-  fft_->data = static_cast<double*>(fftw_malloc(sizeof(double) * reals));
-  if (!fft_->data) throw std::bad_alloc();
+  const std::size_t nx = static_cast<std::size_t>(nx_);
+  const std::size_t plane_size = plane_doubles();
+  fixed_.assign(nx * n * n, 0);
+  // FFTW's transposes may want more room than the planes; the ghosts after them are filled
+  // only once the transposes are done.
+  const std::size_t transposed = std::max({slabs_ ? slabs_->buffer_doubles() : 0, nx * plane_size, plane_size});
+  fft_->planes_doubles = kGhostBefore * plane_size + std::max(transposed, (nx + kGhostAfter) * plane_size);
+  fft_->columns_doubles = transposed;
+  fft_->planes = static_cast<double*>(fftw_malloc(sizeof(double) * fft_->planes_doubles));
+  fft_->columns = static_cast<double*>(fftw_malloc(sizeof(double) * fft_->columns_doubles));
+  if (!fft_->planes || !fft_->columns) throw std::bad_alloc();
   green_ = green_function();
-  std::lock_guard<std::mutex> lock(planner_mutex());
-  auto* complex = reinterpret_cast<fftw_complex*>(fft_->data);
-  fft_->forward = fftw_plan_dft_r2c_3d(n_, n_, n_, fft_->data, complex, FFTW_ESTIMATE);
-  fft_->backward = fftw_plan_dft_c2r_3d(n_, n_, n_, complex, fft_->data, FFTW_ESTIMATE);
-  if (!fft_->forward || !fft_->backward) throw std::runtime_error("PeriodicMesh: FFTW could not plan the transforms");
+  {
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
+    // Unaligned: one plan serves every plane, wherever it starts.
+    constexpr unsigned kFlags = FFTW_ESTIMATE | FFTW_UNALIGNED;
+    double* p = fft_->planes;
+    auto* pc = reinterpret_cast<fftw_complex*>(p);
+    auto* c = reinterpret_cast<fftw_complex*>(fft_->columns);
+    const int nk = n_ / 2 + 1;
+    fft_->plane_forward = fftw_plan_dft_r2c_2d(n_, n_, p, pc, kFlags);
+    fft_->plane_backward = fftw_plan_dft_c2r_2d(n_, n_, pc, p, kFlags);
+    fft_->line_forward = fftw_plan_many_dft(1, &n_, nk, c, nullptr, nk, 1, c, nullptr, nk, 1, FFTW_FORWARD, kFlags);
+    fft_->line_backward = fftw_plan_many_dft(1, &n_, nk, c, nullptr, nk, 1, c, nullptr, nk, 1, FFTW_BACKWARD, kFlags);
+    if (!fft_->plane_forward || !fft_->plane_backward || !fft_->line_forward || !fft_->line_backward)
+      throw std::runtime_error("PeriodicMesh: FFTW could not plan the transforms");
+  }
+  if (slabs_) slabs_->plan_transposes(plane(0), fft_->columns, 2 * static_cast<std::size_t>(n_ / 2 + 1));
 }
 
 PeriodicMesh::~PeriodicMesh() = default;
 
-std::size_t PeriodicMesh::real_index(int i, int j, int k) const {
-  const auto n = static_cast<std::size_t>(n_);
-  return (static_cast<std::size_t>(i) * n + static_cast<std::size_t>(j)) * 2 * (n / 2 + 1) + static_cast<std::size_t>(k);
+std::size_t PeriodicMesh::plane_doubles() const {
+  return static_cast<std::size_t>(n_) * 2 * static_cast<std::size_t>(n_ / 2 + 1);
+}
+
+double* PeriodicMesh::plane(int local) {
+  return fft_->planes + static_cast<std::ptrdiff_t>(local + kGhostBefore) * static_cast<std::ptrdiff_t>(plane_doubles());
+}
+
+std::size_t PeriodicMesh::bytes() const {
+  return sizeof(std::int64_t) * fixed_.size() + sizeof(double) * (green_.size() + gradient_.size()) +
+         sizeof(double) * (fft_->planes_doubles + fft_->columns_doubles);
 }
 
 // Masses are counted in units of m_min 2^-b: 2^-40 of the smallest mass where the sum
 // cannot overflow (N m_max / m_min < 2^22), coarser otherwise. The unit depends only on the
-// set, and integer sums do not depend on their order.
+// set, and integer sums do not depend on their order. Each rank adds only the nodes of its
+// own planes, from every particle whose cloud reaches them.
 void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each) {
   double m_min = 0.0, m_max = 0.0;
   for (std::size_t p = 0; p < masses.size(); ++p) {
@@ -126,22 +167,28 @@ void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const doubl
   fixed_unit_ = std::ldexp(m_min, -bits);
   const double unit_inv = 1.0 / fixed_unit_;
   const double cell_inv = n_ / box_;
+  const int n = n_, x0 = x0_, nx = nx_;
   for_each_particle(for_each, positions.size(), [&](std::size_t p) {
     const Vec3& x = positions[p];
     if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
       throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
+    const Cloud cloud = cloud_of(x, box_, cell_inv, n);
+    const int lo = cloud.w[0].lo - x0, hi = (cloud.w[0].lo + 1) % n - x0;
+    if ((lo < 0 || lo >= nx) && (hi < 0 || hi >= nx)) return;
     const double m = masses[p] * unit_inv;
-    for_each_cloud_node(x, box_, cell_inv, n_, [&](int i, int j, int k, double weight) {
+    for_each_cloud_node(cloud, n, [&](int i, int j, int k, double weight) {
+      const int local = i - x0;
+      if (local < 0 || local >= nx) return;
       const auto add = static_cast<std::int64_t>(std::llround(m * weight));
-      const std::size_t node = (static_cast<std::size_t>(i) * n_ + j) * n_ + k;
+      const std::size_t node = (static_cast<std::size_t>(local) * n + j) * n + k;
       std::atomic_ref<std::int64_t>(fixed_[node]).fetch_add(add, std::memory_order_relaxed);
     });
   });
 }
 
-// The Green's function per mode of the r2c layout, with the FFT's normalisation: it depends
-// only on the mesh, so the constructor computes it once rather than every solve (an exp per
-// mode).
+// The Green's function per mode of this rank's y-planes (mode (i, j, k) at ((j - first) N +
+// i) (N/2 + 1) + k), with the FFT's normalisation: it depends only on the mesh, so the
+// constructor computes it once rather than every solve (an exp per mode).
 std::vector<double> PeriodicMesh::green_function() const {
   const int n = n_;
   const double cell = box_ / n;
@@ -157,11 +204,12 @@ std::vector<double> PeriodicMesh::green_function() const {
     const double sinc = m == 0 ? 1.0 : std::sin(y) / y;
     window[static_cast<std::size_t>(i)] = sinc * sinc;
   }
-  std::vector<double> green(static_cast<std::size_t>(n) * n * nk);
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j)
+  std::vector<double> green(static_cast<std::size_t>(nx_) * n * nk);
+  for (int jl = 0; jl < nx_; ++jl)
+    for (int i = 0; i < n; ++i)
       for (int k = 0; k < nk; ++k) {
-        double& g = green[(static_cast<std::size_t>(i) * n + j) * nk + k];
+        const int j = x0_ + jl;
+        double& g = green[(static_cast<std::size_t>(jl) * n + i) * nk + k];
         // The Nyquist planes and the mean are zeroed.
         if (i == n / 2 || j == n / 2 || k == n / 2 || (i == 0 && j == 0 && k == 0)) {
           g = 0.0;
@@ -177,33 +225,69 @@ std::vector<double> PeriodicMesh::green_function() const {
   return green;
 }
 
-// Density -> potential, in place in the FFT buffer.
-void PeriodicMesh::solve(const ForEach& for_each) {
-  const int n = n_;
-  const double cell = box_ / n;
-  const double density_unit = fixed_unit_ / (cell * cell * cell);
-  // The loops over planes go in parallel (each node's arithmetic is its own, so the bits are
-  // the same); the transforms stay serial, as FFTW's threaded plans may round differently with
-  // the thread count.
-  for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
-    const int i = static_cast<int>(plane);
-    for (int j = 0; j < n; ++j)
-      for (int k = 0; k < n; ++k)
-        fft_->data[real_index(i, j, k)] =
-            static_cast<double>(fixed_[(static_cast<std::size_t>(i) * n + j) * n + k]) * density_unit;
-  });
-  fftw_execute(fft_->forward);
-
-  auto* rho_k = reinterpret_cast<fftw_complex*>(fft_->data);
-  const int nk = n / 2 + 1;
-  for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
-    const std::size_t row = plane * static_cast<std::size_t>(n) * nk;
-    for (std::size_t m = row; m < row + static_cast<std::size_t>(n) * nk; ++m) {
-      rho_k[m][0] *= green_[m];
-      rho_k[m][1] *= green_[m];
+// Between x-planes ((i N + j) rows of 2 (N/2 + 1) reals) and y-planes ((j N + i) rows): by
+// FFTW across ranks, by a copy per plane alone.
+void PeriodicMesh::transpose(bool to_columns, const ForEach& for_each) {
+  if (slabs_) {
+    to_columns ? slabs_->transpose_to_columns() : slabs_->transpose_to_planes();
+    return;
+  }
+  const std::size_t n = static_cast<std::size_t>(n_), row = 2 * (n / 2 + 1);
+  double* planes = plane(0);
+  double* columns = fft_->columns;
+  for_each_or_serial(for_each, n, [&](std::size_t a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      // a is the destination's plane: y for columns, x for planes.
+      const std::size_t from = (b * n + a) * row, to = (a * n + b) * row;
+      if (to_columns)
+        std::copy_n(planes + from, row, columns + to);
+      else
+        std::copy_n(columns + from, row, planes + to);
     }
   });
-  fftw_execute(fft_->backward);
+}
+
+// Density -> potential in this rank's planes, ghosts included.
+void PeriodicMesh::solve(const ForEach& for_each) {
+  const int n = n_;
+  const std::size_t row = 2 * static_cast<std::size_t>(n / 2 + 1);
+  const double cell = box_ / n;
+  const double density_unit = fixed_unit_ / (cell * cell * cell);
+  const auto own = static_cast<std::size_t>(nx_);
+  // Each plane's arithmetic is its own, so the planes go in parallel with the same bits.
+  for_each_or_serial(for_each, own, [&](std::size_t l) {
+    double* p = plane(static_cast<int>(l));
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k < n; ++k)
+        p[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(k)] =
+            static_cast<double>(fixed_[(l * n + static_cast<std::size_t>(j)) * n + static_cast<std::size_t>(k)]) *
+            density_unit;
+    fftw_execute_dft_r2c(fft_->plane_forward, p, reinterpret_cast<fftw_complex*>(p));
+  });
+  transpose(true, for_each);
+  const std::size_t nk = static_cast<std::size_t>(n / 2 + 1);
+  for_each_or_serial(for_each, own, [&](std::size_t jl) {
+    auto* c = reinterpret_cast<fftw_complex*>(fft_->columns) + jl * static_cast<std::size_t>(n) * nk;
+    fftw_execute_dft(fft_->line_forward, c, c);
+    const double* g = &green_[jl * static_cast<std::size_t>(n) * nk];
+    for (std::size_t m = 0; m < static_cast<std::size_t>(n) * nk; ++m) {
+      c[m][0] *= g[m];
+      c[m][1] *= g[m];
+    }
+    fftw_execute_dft(fft_->line_backward, c, c);
+  });
+  transpose(false, for_each);
+  for_each_or_serial(for_each, own, [&](std::size_t l) {
+    double* p = plane(static_cast<int>(l));
+    fftw_execute_dft_c2r(fft_->plane_backward, reinterpret_cast<fftw_complex*>(p), p);
+  });
+  const std::size_t plane_size = plane_doubles();
+  if (slabs_) {
+    slabs_->fill_ghost_planes(plane(-kGhostBefore), plane_size, kGhostBefore, kGhostAfter);
+  } else {
+    for (int g = -kGhostBefore; g < 0; ++g) std::copy_n(plane(g + n), plane_size, plane(g));
+    for (int g = n; g < n + kGhostAfter; ++g) std::copy_n(plane(g - n), plane_size, plane(g));
+  }
 }
 
 void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const double> masses,
@@ -214,29 +298,32 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
   assign(positions, masses, for_each);
   solve(for_each);
 
-  double total_mass = 0.0;
-  for (const std::int64_t f : fixed_) total_mass += static_cast<double>(f);
-  total_mass *= fixed_unit_;
+  std::int64_t assigned = 0;
+  for (const std::int64_t f : fixed_) assigned += f;
+  if (slabs_) assigned = slabs_->sum(assigned);
+  const double total_mass = static_cast<double>(assigned) * fixed_unit_;
   const double background = 4.0 * std::numbers::pi * G_ * r_s_ * r_s_ * total_mass / (box_ * box_ * box_);
   const double self = G_ / (std::sqrt(std::numbers::pi) * r_s_);
 
-  const int n = n_;
+  const int n = n_, nx = nx_, x0 = x0_;
+  const std::size_t row = 2 * static_cast<std::size_t>(n / 2 + 1);
   const double cell_inv = n / box_;
-  const double* phi = fft_->data;
-  // The fourth-order difference of the potential along each axis, once per node: each node
-  // is read by the clouds of many particles, and each cloud reads eight nodes' three.
-  const auto nodes = static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
-  gradient_.resize(3 * nodes);
-  for_each_or_serial(for_each, static_cast<std::size_t>(n), [&](std::size_t plane) {
-    const int i = static_cast<int>(plane);
+  // The fourth-order difference of the potential along each axis, once per node of the own
+  // planes and the one above (which the clouds of the top plane reach): each node is read by
+  // the clouds of many particles, and each cloud reads eight nodes' three.
+  const auto plane_nodes = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+  const std::size_t gradient_planes = nx > 0 ? static_cast<std::size_t>(nx + 1) : 0;  // a rank without planes has none
+  gradient_.resize(3 * plane_nodes * gradient_planes);
+  for_each_or_serial(for_each, gradient_planes, [&](std::size_t l) {
+    const int li = static_cast<int>(l);
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < n; ++k) {
-        const std::size_t node = (static_cast<std::size_t>(i) * n + j) * n + k;
+        const std::size_t node = l * plane_nodes + static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k);
         for (int d = 0; d < 3; ++d) {
           auto at = [&](int shift) {
-            int ii = i, jj = j, kk = k;
+            int ii = li, jj = j, kk = k;
             (d == 0 ? ii : d == 1 ? jj : kk) += shift;
-            return phi[real_index(wrap_index(ii, n), wrap_index(jj, n), wrap_index(kk, n))];
+            return plane(ii)[static_cast<std::size_t>(wrap_index(jj, n)) * row + static_cast<std::size_t>(wrap_index(kk, n))];
           };
           gradient_[3 * node + static_cast<std::size_t>(d)] = (8.0 * (at(1) - at(-1)) - (at(2) - at(-2))) * (cell_inv / 12.0);
         }
@@ -245,14 +332,25 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
   for_each_particle(for_each, count, [&](std::size_t p) {
     Vec3 acc;
     double pot = 0.0;
-    for_each_cloud_node(positions[p], box_, cell_inv, n, [&](int i, int j, int k, double weight) {
-      const double* g = &gradient_[3 * ((static_cast<std::size_t>(i) * n + j) * n + k)];
-      for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
-      pot += weight * phi[real_index(i, j, k)];
-    });
+    const Cloud cloud = cloud_of(positions[p], box_, cell_inv, n);
+    const int lo = cloud.w[0].lo - x0;
+    if (lo >= 0 && lo < nx) {  // the rank of its lower plane interpolates it
+      for_each_cloud_node(cloud, n, [&](int i, int j, int k, double weight) {
+        const int local = i == cloud.w[0].lo ? lo : lo + 1;
+        const double* g = &gradient_[3 * (static_cast<std::size_t>(local) * plane_nodes + static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k))];
+        for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
+        pot += weight * plane(local)[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(k)];
+      });
+      pot = pot + background + self * masses[p];
+    }
     acceleration[p] = acc;
-    potential[p] = pot + background + self * masses[p];
+    potential[p] = pot;
   });
+  if (slabs_) {
+    // Every particle was interpolated by one rank; the others left it +0.0.
+    slabs_->combine_bits(std::span<double>(reinterpret_cast<double*>(acceleration.data()), 3 * count));
+    slabs_->combine_bits(potential);
+  }
 }
 
 }  // namespace fountain::gravity

@@ -8,6 +8,7 @@
 #include "core/ForEach.hpp"
 #include "core/Vec3.hpp"
 #include "gravity/GravityKernel.hpp"
+#include "gravity/MeshSlabs.hpp"
 
 namespace fountain::gravity {
 
@@ -21,11 +22,18 @@ namespace fountain::gravity {
 //  3. the gradient by fourth-order finite differences on the mesh, and cloud-in-cell
 //     interpolation back to each particle with its own weights.
 // What it leaves out is exactly the short-range force GravitySplit{r_s} gives the tree.
+//
+// The 3D transform is taken as FFTW's MPI transforms take it, but with plans of our own: a 2D
+// transform of each x-plane, a transpose to y-planes, 1D transforms along x, and back. Each
+// plane's transform is the same plan on the same numbers wherever it runs, so the result has
+// the same bits on any number of threads (which share the planes) and of ranks (which hold
+// slabs of them, `MeshSlabs`): no rank holds a copy of the whole mesh.
 class PeriodicMesh {
  public:
   // cells: N, even and at least 8; box: L; r_s: the split scale (GADGET's 1.25 mesh cells is
-  // `default_split_scale`); G: Newton's constant in the run's units.
-  PeriodicMesh(int cells, double box, double r_s, double G);
+  // `default_split_scale`); G: Newton's constant in the run's units; slabs: the ranks that
+  // share the mesh (null: this process holds all of it).
+  PeriodicMesh(int cells, double box, double r_s, double G, std::unique_ptr<MeshSlabs> slabs = nullptr);
   ~PeriodicMesh();
   PeriodicMesh(const PeriodicMesh&) = delete;
   PeriodicMesh& operator=(const PeriodicMesh&) = delete;
@@ -33,16 +41,24 @@ class PeriodicMesh {
   static double default_split_scale(int cells, double box) { return 1.25 * box / cells; }
 
   // The long-range acceleration and potential at every particle. Positions outside [0, L)
-  // are wrapped. The potential includes the constants that make mesh + short range the
+  // are wrapped. Across ranks every rank passes every particle (the same arrays) and gets
+  // every particle's force: each rank assigns and interpolates only at its own planes. The potential includes the constants that make mesh + short range the
   // periodic potential of docs/gravity.md: 4 pi G r_s^2 M / L^3 (the background's short-range
   // part, which no pair sum subtracts) and G m / (sqrt(pi) r_s) (the particle's own smoothed
   // self-potential on the mesh).
   void compute(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
                std::span<double> potential, const ForEach& for_each = {});
 
-  // The assigned mass per node of the last compute, in the fixed-point units (node index
-  // (i N + j) N + k for node position (i, j, k) Delta): what must not depend on threads.
+  // The assigned mass per node of this rank's planes in the last compute, in the fixed-point
+  // units (node index ((i - first_plane()) N + j) N + k for node position (i, j, k) Delta):
+  // what must not depend on threads or ranks.
   const std::vector<std::int64_t>& assigned_mass() const { return fixed_; }
+  // This rank's x-planes: [first_plane(), first_plane() + planes()).
+  int first_plane() const { return x0_; }
+  int planes() const { return nx_; }
+  // Bytes of mesh this rank holds (its planes of density, transform, Green's function and
+  // gradient): about 1 / ranks of one process's.
+  std::size_t bytes() const;
   GravitySplit split() const { return GravitySplit{r_s_}; }
   int cells() const { return n_; }
   double box() const { return box_; }
@@ -50,15 +66,19 @@ class PeriodicMesh {
  private:
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
   void solve(const ForEach& for_each);
+  void transpose(bool to_columns, const ForEach& for_each);
   std::vector<double> green_function() const;
-  std::size_t real_index(int i, int j, int k) const;
+  double* plane(int local);  // this rank's local plane (-2 ... planes() + 2 with the ghosts)
+  std::size_t plane_doubles() const;
 
   int n_;
   double box_, r_s_, G_;
+  std::unique_ptr<MeshSlabs> slabs_;
+  int x0_ = 0, nx_ = 0;  // this rank's planes
   double fixed_unit_ = 1.0;  // mass of one fixed-point unit
   std::vector<std::int64_t> fixed_;
-  std::vector<double> green_;     // per mode of the r2c layout (green_function)
-  std::vector<double> gradient_;  // the potential's mesh gradient, three per node
+  std::vector<double> green_;     // per mode of this rank's y-planes (green_function)
+  std::vector<double> gradient_;  // the potential's mesh gradient, three per node of planes 0 ... planes()
   struct Fft;
   std::unique_ptr<Fft> fft_;
 };
