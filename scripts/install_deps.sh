@@ -2,7 +2,7 @@
 # Installs, from Debian's packages, whatever Fountain needs to build, test and plot.
 set -eu
 pkgs="cmake ninja-build g++ pkg-config libtbb-dev libhdf5-dev libopenmpi-dev openmpi-bin libfmt-dev
-libyaml-cpp-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev libfftw3-mpi-dev libboost-dev
+libyaml-cpp-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libfftw3-dev libfftw3-mpi-dev libmetis-dev libboost-dev
 python3-numpy python3-h5py python3-matplotlib python3-yt"
 missing=""
 for p in $pkgs; do
