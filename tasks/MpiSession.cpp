@@ -49,6 +49,15 @@ MpiSession::~MpiSession() {
 
 bool MpiSession::available() { return true; }
 
+int MpiSession::world_size() {
+  int ready = 0;
+  MPI_Initialized(&ready);
+  if (!ready) return 1;
+  int size = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  return size;
+}
+
 void MpiSession::abort(int code) const {
   if (size_ > 1) MPI_Abort(MPI_COMM_WORLD, code);
   std::exit(code);
@@ -57,6 +66,7 @@ void MpiSession::abort(int code) const {
 MpiSession::MpiSession(int*, char***) {}
 MpiSession::~MpiSession() = default;
 bool MpiSession::available() { return false; }
+int MpiSession::world_size() { return 1; }
 void MpiSession::abort(int code) const { std::exit(code); }
 #endif
 

@@ -21,6 +21,8 @@ class MpiSession {
   [[noreturn]] void abort(int code) const;
   // Whether this process was built with MPI at all (FOUNTAIN_MPI).
   static bool available();
+  // The ranks of MPI_COMM_WORLD once MPI is initialised; 1 before, or without MPI.
+  static int world_size();
 
  private:
   int rank_ = 0;

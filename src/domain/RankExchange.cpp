@@ -4,6 +4,8 @@
 #include <deque>
 #include <stdexcept>
 
+#include "tasks/MpiSession.hpp"
+
 #ifdef FOUNTAIN_HAVE_MPI
 #include <mpi.h>
 #endif
@@ -33,11 +35,7 @@ int as_count(std::size_t n) {
 }  // namespace
 
 std::unique_ptr<RankExchange> RankExchange::world() {
-  int ready = 0;
-  MPI_Initialized(&ready);
-  if (!ready) return nullptr;
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int size = tasks::MpiSession::world_size();
   if (size < 2) return nullptr;
   std::unique_ptr<RankExchange> r(new RankExchange());
   r->impl_ = std::make_unique<Impl>();

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "tasks/MpiSession.hpp"
+
 #ifdef FOUNTAIN_HAVE_MPI
 #include <fftw3-mpi.h>
 #include <mpi.h>
@@ -38,11 +40,7 @@ void check(int err, const char* what) {
 }  // namespace
 
 std::unique_ptr<MeshSlabs> MeshSlabs::world(int cells) {
-  int ready = 0;
-  MPI_Initialized(&ready);
-  if (!ready) return nullptr;
-  int size = 1;
-  MPI_Comm_size(MPI_COMM_WORLD, &size);
+  const int size = tasks::MpiSession::world_size();
   if (size < 2) return nullptr;
   {
     std::lock_guard<std::mutex> lock(fftw_planner_mutex());
