@@ -42,10 +42,11 @@ class PeriodicMesh {
 
   // The long-range acceleration and potential at every particle. Positions outside [0, L)
   // are wrapped. Across ranks every rank passes every particle (the same arrays) and gets
-  // every particle's force: each rank assigns and interpolates only at its own planes. The potential includes the constants that make mesh + short range the
-  // periodic potential of docs/gravity.md: 4 pi G r_s^2 M / L^3 (the background's short-range
-  // part, which no pair sum subtracts) and G m / (sqrt(pi) r_s) (the particle's own smoothed
-  // self-potential on the mesh).
+  // every particle's force: each rank assigns and interpolates only at its own planes. The
+  // potential includes the constants that make mesh + short range the periodic potential of
+  // docs/gravity.md: 4 pi G r_s^2 M / L^3 (the background's short-range part, which no pair
+  // sum subtracts) and G m / (sqrt(pi) r_s) (the particle's own smoothed self-potential on
+  // the mesh).
   void compute(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
                std::span<double> potential, const ForEach& for_each = {});
 
