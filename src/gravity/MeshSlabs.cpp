@@ -79,9 +79,9 @@ MeshSlabs::~MeshSlabs() {
   if (!finalized && impl_->comm != MPI_COMM_NULL) MPI_Comm_free(&impl_->comm);
 }
 
-void MeshSlabs::plan_transposes(double* planes, double* columns, std::size_t row) {
+void MeshSlabs::plan_transposes(double* planes, double* columns) {
   std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-  const auto r = static_cast<std::ptrdiff_t>(row);
+  const std::ptrdiff_t r = 2 * (n_ / 2 + 1);
   impl_->to_columns = fftw_mpi_plan_many_transpose(n_, n_, r, FFTW_MPI_DEFAULT_BLOCK, FFTW_MPI_DEFAULT_BLOCK, planes,
                                                    columns, impl_->comm, FFTW_ESTIMATE);
   impl_->to_planes = fftw_mpi_plan_many_transpose(n_, n_, r, FFTW_MPI_DEFAULT_BLOCK, FFTW_MPI_DEFAULT_BLOCK, columns,
@@ -151,7 +151,7 @@ std::int64_t MeshSlabs::sum(std::int64_t local) const {
 struct MeshSlabs::Impl {};
 std::unique_ptr<MeshSlabs> MeshSlabs::world(int) { return nullptr; }
 MeshSlabs::~MeshSlabs() = default;
-void MeshSlabs::plan_transposes(double*, double*, std::size_t) {}
+void MeshSlabs::plan_transposes(double*, double*) {}
 void MeshSlabs::transpose_to_columns() {}
 void MeshSlabs::transpose_to_planes() {}
 void MeshSlabs::fill_ghost_planes(double*, std::size_t, int, int) const {}

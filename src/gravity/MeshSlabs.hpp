@@ -35,10 +35,10 @@ class MeshSlabs {
   // the rank's planes, more where its transpose wants room).
   std::size_t buffer_doubles() const { return buffer_doubles_; }
 
-  // Plans the transposes between `planes` (this rank's x-planes, each N rows of `row` doubles)
-  // and `columns` (its y-planes, each N rows of `row` doubles). Collective; the buffers must
-  // stay in place for the slabs' life.
-  void plan_transposes(double* planes, double* columns, std::size_t row);
+  // Plans the transposes between `planes` (this rank's x-planes, each N rows of 2 (N/2 + 1)
+  // doubles) and `columns` (its y-planes, rows alike). Collective; the buffers must stay in
+  // place for the slabs' life.
+  void plan_transposes(double* planes, double* columns);
   void transpose_to_columns();
   void transpose_to_planes();
 

@@ -128,7 +128,7 @@ PeriodicMesh::PeriodicMesh(int cells, double box, double r_s, double G, std::uni
     if (!fft_->plane_forward || !fft_->plane_backward || !fft_->line_forward || !fft_->line_backward)
       throw std::runtime_error("PeriodicMesh: FFTW could not plan the transforms");
   }
-  if (slabs_) slabs_->plan_transposes(plane(0), fft_->columns, 2 * static_cast<std::size_t>(n_ / 2 + 1));
+  if (slabs_) slabs_->plan_transposes(plane(0), fft_->columns);
 }
 
 PeriodicMesh::~PeriodicMesh() = default;
