@@ -33,6 +33,10 @@ void write_catalogue_header(hdf5::File& f, std::size_t groups, std::size_t ids, 
   f.write_attribute(kHeader, "Omega0", input.omega_m);
   f.write_attribute(kHeader, "OmegaLambda", input.omega_lambda);
   f.write_attribute(kHeader, "HubbleParam", input.hubble_param);
+  if (input.omega_b >= 0.0) f.write_attribute(kHeader, "OmegaBaryon", input.omega_b);
+  f.write_attribute(kHeader, "UnitLength_in_cm", input.units.length_cgs);
+  f.write_attribute(kHeader, "UnitMass_in_g", input.units.mass_cgs);
+  f.write_attribute(kHeader, "UnitVelocity_in_cm_per_s", input.units.velocity_cgs);
   f.write_attribute(kHeader, "Snapshot", snapshot);
 }
 }  // namespace
@@ -167,11 +171,19 @@ FofHalos read_fof_halos(const std::string& path) {
   FofHalos h;
   h.box = header_scalar(f, "BoxSize", 0.0, true);
   h.time = header_scalar(f, "Time", 0.0, true);
+  h.omega_m = header_scalar(f, "Omega0", 0.0, false);
+  h.omega_lambda = header_scalar(f, "OmegaLambda", 0.0, false);
+  h.hubble_param = header_scalar(f, "HubbleParam", 1.0, false);
+  h.omega_b = header_scalar(f, "OmegaBaryon", -1.0, false);
+  h.units.length_cgs = header_scalar(f, "UnitLength_in_cm", h.units.length_cgs, false);
+  h.units.mass_cgs = header_scalar(f, "UnitMass_in_g", h.units.mass_cgs, false);
+  h.units.velocity_cgs = header_scalar(f, "UnitVelocity_in_cm_per_s", h.units.velocity_cgs, false);
   h.centre = f.read_vec3("/Group/GroupPos");
+  h.mass = f.read_doubles("/Group/GroupMass");
   h.m200 = f.read_doubles("/Group/Group_M_Crit200");
   h.r200 = f.read_doubles("/Group/Group_R_Crit200");
-  if (h.m200.size() != h.centre.size() || h.r200.size() != h.centre.size())
-    f.fail("/Group", "GroupPos, Group_M_Crit200 and Group_R_Crit200 differ in length");
+  if (h.m200.size() != h.centre.size() || h.r200.size() != h.centre.size() || h.mass.size() != h.centre.size())
+    f.fail("/Group", "GroupPos, GroupMass, Group_M_Crit200 and Group_R_Crit200 differ in length");
   return h;
 }
 

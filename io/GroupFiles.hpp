@@ -37,18 +37,22 @@ struct FofCatalogueInfo {
   double overdensity = 0.0;  // the mean density within R_200 (internal units, comoving)
 };
 
-// /Header (counts, the snapshot's time and cosmology, how the groups were found), /Group
+// /Header (counts, the snapshot's time, cosmology and units, how the groups were found), /Group
 // (GroupLen, GroupLenType, GroupMass, GroupMassType, GroupCM, GroupPos = the potential
 // minimum, GroupVel, Group_M_Crit200, Group_R_Crit200, GroupOffset) and /IDs (ID and Type of
 // the members, group by group, each group's by type then ID).
 void write_fof_catalogue(const std::string& path, const std::vector<groups::Group>& groups, const GroupInput& input,
                          const FofCatalogueInfo& info);
 
-// What a zoom needs of a friends-of-friends catalogue: each group's centre and M_200, R_200.
+// What a zoom or a mass function needs of a friends-of-friends catalogue: each group's centre,
+// FOF mass and M_200, R_200, and the snapshot's box, time, cosmology and units (a header
+// without OmegaBaryon gives -1; one without units, Fountain's defaults).
 struct FofHalos {
   std::vector<Vec3> centre;  // GroupPos
-  std::vector<double> m200, r200;
+  std::vector<double> mass, m200, r200;
   double box = 0.0, time = 0.0;
+  double omega_m = 0.0, omega_lambda = 0.0, hubble_param = 1.0, omega_b = -1.0;
+  Units units;
 };
 // Reads them; a missing or malformed file or dataset throws InputError naming it.
 FofHalos read_fof_halos(const std::string& path);
@@ -60,7 +64,7 @@ struct HopCatalogueInfo {
   double mean_baryon_density = 0.0;  // the thresholds' unit (comoving)
 };
 
-// /Header (counts, the snapshot's time and cosmology, HOP's parameters and thresholds), /Group
+// /Header (counts, the snapshot's time, cosmology and units, HOP's parameters and thresholds), /Group
 // (GroupLen, GroupLenType, GroupMass, GroupMassType with hidden stellar mass under type 4,
 // GroupCM, GroupPeakPos, GroupPeakDensity, GroupVel, GroupOffset) and /IDs (ID, Type and the
 // HOP Density of the members, group by group in increasing particle order). `members[k]` is

@@ -447,7 +447,26 @@ EOT
     set +e
     "$bin" fof dm.hdf5 -o g.hdf5 -b 0.2 --linking-length 0.1 > bad.txt 2>&1; status=$?
     set -e
-    [ "$status" -eq 2 ] && grep -q "give one" bad.txt || { cat bad.txt; fail "two linking lengths were not refused"; } ;;
+    [ "$status" -eq 2 ] && grep -q "give one" bad.txt || { cat bad.txt; fail "two linking lengths were not refused"; }
+    # `fountain mass-function` on that catalogue: its counts are the groups' FOF masses binned,
+    # the fits' expected counts positive and falling with mass; bad bins are refused.
+    "$bin" mass-function g1.hdf5 --log-min 12 --log-max 14.5 --bin-width 0.5 --omega-b 0.04 -o mf.txt > mf_log.txt 2>&1 ||
+      { cat mf_log.txt; fail "mass-function"; }
+    cat mf_log.txt
+    "$python" - <<'EOT' || { cat mf.txt; fail "the mass-function table is wrong"; }
+import h5py, numpy as np, sys
+t = np.loadtxt('mf.txt')
+mass = h5py.File('g1.hdf5', 'r')['Group/GroupMass'][:]
+counts, _ = np.histogram(np.log10(mass), bins=np.arange(12.0, 14.51, 0.5))
+ok = t.shape == (5, 5) and np.array_equal(t[:, 2], counts) and counts.sum() == 2
+st = t[:, 4]
+ok = ok and np.all(st > 0) and np.all(np.diff(st) < 0)
+sys.exit(0 if ok else 1)
+EOT
+    set +e
+    "$bin" mass-function g1.hdf5 --log-min 14 --log-max 13 -o mf.txt > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "log-max" bad.txt || { cat bad.txt; fail "an empty bin range was not refused"; } ;;
   hop_catalogue)
     # `fountain hop` on a snapshot's baryons: two Plummer clumps of gas (with hidden stellar
     # mass) and stars, 1 Mpc/h apart. Two groups at the paper's thresholds (80, 200 and 240

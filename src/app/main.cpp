@@ -8,6 +8,7 @@
 
 #include "app/GroupCommand.hpp"
 #include "app/IcCommand.hpp"
+#include "app/MassFunctionCommand.hpp"
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
@@ -16,7 +17,7 @@
 
 namespace {
 
-constexpr const char* kCommands[] = {"run", "ic", "fof", "hop", "params"};
+constexpr const char* kCommands[] = {"run", "ic", "fof", "hop", "mass-function", "params"};
 
 // CLI11 answers an unknown first word with "A subcommand is required": name it instead.
 bool is_unknown_command(int argc, char** argv) {
@@ -130,6 +131,26 @@ int main(int argc, char** argv) {
   hop->add_option("--omega-b", hop_request.omega_b, "Omega_b, if the snapshot's header lacks OmegaBaryon")->check(CLI::Range(0.0, 1.0));
   hop->add_option("-t,--threads", hop_request.threads, "Threads (default: all cores)")->check(CLI::NonNegativeNumber);
 
+  auto* mass_function =
+      app.add_subcommand("mass-function", "A friends-of-friends catalogue's halo counts against the Jenkins et al. and "
+                                          "Sheth & Tormen mass functions, as a text table");
+  MassFunctionRequest mf_request;
+  mass_function->add_option("catalogue", mf_request.catalogue, "Catalogue of `fountain fof`")->required();
+  mass_function->add_option("-o,--output", mf_request.output, "Table to write")->required();
+  mass_function->add_option("--sigma-8", mf_request.sigma_8, "sigma_8 of the initial conditions' linear spectrum at z = 0")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  mass_function->add_option("--n-s", mf_request.n_s, "Their spectral index")->check(CLI::Range(-5.0, 5.0))->capture_default_str();
+  mass_function->add_option("--omega-b", mf_request.omega_b,
+                            "Omega_b of their transfer function (default: the catalogue's OmegaBaryon, else 0.04)")
+      ->check(CLI::Range(0.0, 1.0));
+  mass_function->add_option("--transfer", mf_request.transfer, "Their Eisenstein & Hu fit: full | no_wiggle | zero_baryon")
+      ->check(CLI::IsMember({"full", "no_wiggle", "zero_baryon"}))
+      ->capture_default_str();
+  mass_function->add_option("--log-min", mf_request.log_min, "Lowest bin edge, log10(M / (Msun/h))")->capture_default_str();
+  mass_function->add_option("--log-max", mf_request.log_max, "Highest bin edge")->capture_default_str();
+  mass_function->add_option("--bin-width", mf_request.width, "Bin width in dex")->check(CLI::PositiveNumber)->capture_default_str();
+
   IcRequest::Zoom& zoom = request.zoom;
   std::vector<int> zoom_levels;
   auto* levels_opt = ic->add_option("--levels", zoom_levels,
@@ -154,7 +175,7 @@ int main(int argc, char** argv) {
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
   if (is_unknown_command(argc, argv)) {
-    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, fof, hop, params (fountain --help explains them)\n",
+    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, fof, hop, mass-function, params (fountain --help explains them)\n",
                argv[1]);
     return 2;
   }
@@ -260,6 +281,8 @@ int main(int argc, char** argv) {
                                      "least delta_saddle",
                                      hop_request.peak_factor, hop_request.saddle_factor));
       fmt::print(stderr, "{}\n", find_hop_groups(hop_request));
+    } else if (*mass_function) {
+      fmt::print(stderr, "{}\n", write_mass_function(mf_request));
     } else if (*params_cmd) {
       fmt::print("{}", parameter_reference_markdown());
     }
