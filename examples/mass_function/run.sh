@@ -43,5 +43,5 @@ elif [ ! -f run/snapshot_0002.hdf5 ]; then
   "$bin" run params.yml "$@"
 fi
 [ -f fof.hdf5 ] || "$bin" fof run/snapshot_0002.hdf5 -o fof.hdf5 "$@"
-"$bin" mass-function fof.hdf5 --snapshot run/snapshot_0002.hdf5 -o mass_function.txt
+"$bin" mass-function fof.hdf5 --sigma-8 0.9 --omega-b 0.03 -o mass_function.txt
 /usr/bin/python3 "$here/plot_mass_function.py" mass_function.txt -o mass_function.png
