@@ -84,24 +84,6 @@ CellSpan cell_span(double lo, double hi, double cell, int cells) {
   return {static_cast<int>(first), static_cast<int>(b - a + 1)};
 }
 
-// Calls visit(index) for each cell of the reach grid that the box [lo, hi] overlaps
-// (periodically) until one returns true; returns whether one did.
-template <class Visit>
-bool any_cell(const StepContext::RefitReach& reach, const Vec3& lo, const Vec3& hi, Visit&& visit) {
-  CellSpan span[3];
-  for (int k = 0; k < 3; ++k) span[k] = cell_span(lo[k], hi[k], reach.cell, reach.cells);
-  const auto n = static_cast<std::size_t>(reach.cells);
-  for (int i = 0; i < span[0].count; ++i)
-    for (int j = 0; j < span[1].count; ++j)
-      for (int l = 0; l < span[2].count; ++l) {
-        const auto x = static_cast<std::size_t>((span[0].first + i) % reach.cells);
-        const auto y = static_cast<std::size_t>((span[1].first + j) % reach.cells);
-        const auto z = static_cast<std::size_t>((span[2].first + l) % reach.cells);
-        if (visit((x * n + y) * n + z)) return true;
-      }
-  return false;
-}
-
 // With TreePM a walk reads only nodes and particles within the cut-off of its targets, which
 // lie in the active leaves, each within its box grown by how far its particles moved since
 // the rebuild (at most moved_most). A piece of the tree, refitted last when its particles lay
@@ -129,11 +111,17 @@ void plan_refit_reach(StepContext& ctx) {
   for (int c : leaves) {
     const Cell& cell = ctx.space.cell(c);
     if (cell.ti_end_min > ctx.ti_current) continue;
-    any_cell(reach, cell.lo - Vec3{grow, grow, grow}, cell.lo + cell.width + Vec3{grow, grow, grow},
-             [&](std::size_t index) {
-               reach.marked[index] = 1;
-               return false;
-             });
+    CellSpan span[3];
+    for (int k = 0; k < 3; ++k)
+      span[k] = cell_span(cell.lo[k] - grow, cell.lo[k] + cell.width[k] + grow, reach.cell, reach.cells);
+    for (int i = 0; i < span[0].count; ++i)
+      for (int j = 0; j < span[1].count; ++j)
+        for (int l = 0; l < span[2].count; ++l) {
+          const auto x = static_cast<std::size_t>((span[0].first + i) % reach.cells);
+          const auto y = static_cast<std::size_t>((span[1].first + j) % reach.cells);
+          const auto z = static_cast<std::size_t>((span[2].first + l) % reach.cells);
+          reach.marked[(x * n + y) * n + z] = 1;
+        }
   }
 }
 
@@ -141,9 +129,19 @@ void plan_refit_reach(StepContext& ctx) {
 // cell.
 bool within_reach(const StepContext::RefitReach& reach, const TreeNode& piece) {
   const double extent = 0.5 * piece.side + reach.radius;
-  const Vec3 grown{extent, extent, extent};
-  return any_cell(reach, piece.centre - grown, piece.centre + grown,
-                  [&](std::size_t index) { return reach.marked[index] != 0; });
+  CellSpan span[3];
+  for (int k = 0; k < 3; ++k)
+    span[k] = cell_span(piece.centre[k] - extent, piece.centre[k] + extent, reach.cell, reach.cells);
+  const auto n = static_cast<std::size_t>(reach.cells);
+  for (int i = 0; i < span[0].count; ++i)
+    for (int j = 0; j < span[1].count; ++j)
+      for (int l = 0; l < span[2].count; ++l) {
+        const auto x = static_cast<std::size_t>((span[0].first + i) % reach.cells);
+        const auto y = static_cast<std::size_t>((span[1].first + j) % reach.cells);
+        const auto z = static_cast<std::size_t>((span[2].first + l) % reach.cells);
+        if (reach.marked[(x * n + y) * n + z] != 0) return true;
+      }
+  return false;
 }
 }  // namespace
 
