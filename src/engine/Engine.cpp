@@ -584,7 +584,6 @@ void Engine::prepare_step(IntegerTime ti) {
     moved_[static_cast<std::size_t>(c)] = cell.dx_max + cell.v_max * std::fabs(ctx_->drift_factor(cell.ti_drift, ti));
     moved_most = std::max(moved_most, moved_[static_cast<std::size_t>(c)]);
   }
-  ctx_->moved_most = moved_most;
   // A gas particle of leaf a misses no neighbour while h + dx_a + dx_b stays within the gap
   // to every leaf b off its list (that gap is at least a's cover). Leaves beyond a's
   // surroundings are at least twice the cover away: while the fastest motion anywhere fits

@@ -1,7 +1,5 @@
 #include "gravity/GravityLoop.hpp"
 
-#include <algorithm>
-#include <cmath>
 #include <vector>
 
 #include "gravity/GravityParams.hpp"
@@ -66,95 +64,14 @@ void compute_long_range(StepContext& ctx) {
   }
 }
 
-namespace {
-// Leaves with particles due this step above this share: the whole tree is refitted.
-constexpr double kPartialRefitShare = 0.25;
-// The reach grid's cells per side at most.
-constexpr int kReachCells = 64;
-
-// The grid cells [first, first + count) along one axis that the interval [lo, hi] overlaps,
-// periodically (all of them if it spans the box).
-struct CellSpan {
-  int first, count;
-};
-CellSpan cell_span(double lo, double hi, double cell, int cells) {
-  const auto a = static_cast<long long>(std::floor(lo / cell)), b = static_cast<long long>(std::floor(hi / cell));
-  if (b - a + 1 >= cells) return {0, cells};
-  const long long first = ((a % cells) + cells) % cells;
-  return {static_cast<int>(first), static_cast<int>(b - a + 1)};
-}
-
-// With TreePM a walk reads only nodes and particles within the cut-off of its targets, which
-// lie in the active leaves, each within its box grown by how far its particles moved since
-// the rebuild (at most moved_most). A piece of the tree, refitted last when its particles lay
-// within its cube, has them now at most 2 moved_most from it (both positions are within
-// moved_most of the rebuild's), so a piece whose cube lies farther than r_cut + 2 moved_most
-// from every grown active box is never read and may stay stale (GravityTree::refit_group).
-// The active boxes are marked on a grid, and a piece is kept current if its cube grown by
-// that distance overlaps a marked cell: a coarser test than the distance, never a finer one.
-void plan_refit_reach(StepContext& ctx) {
-  StepContext::RefitReach& reach = ctx.refit_reach;
-  reach.cells = 0;
-  if (!ctx.long_range) return;
-  const std::vector<int>& leaves = ctx.space.leaves();
-  std::size_t due = 0;
-  for (int c : leaves) due += ctx.space.cell(c).ti_end_min <= ctx.ti_current ? 1 : 0;
-  if (static_cast<double>(due) > kPartialRefitShare * static_cast<double>(leaves.size())) return;
-  const double box = ctx.long_range->mesh.box();
-  const double grow = ctx.moved_most;
-  // Past the rounding of any distance inside the box.
-  reach.radius = ctx.long_range->mesh.split().cutoff_radius() + 2.0 * grow + 1e-9 * box;
-  reach.cells = std::clamp(static_cast<int>(box / reach.radius), 1, kReachCells);
-  reach.cell = box / reach.cells;
-  const auto n = static_cast<std::size_t>(reach.cells);
-  reach.marked.assign(n * n * n, 0);
-  for (int c : leaves) {
-    const Cell& cell = ctx.space.cell(c);
-    if (cell.ti_end_min > ctx.ti_current) continue;
-    CellSpan span[3];
-    for (int k = 0; k < 3; ++k)
-      span[k] = cell_span(cell.lo[k] - grow, cell.lo[k] + cell.width[k] + grow, reach.cell, reach.cells);
-    for (int i = 0; i < span[0].count; ++i)
-      for (int j = 0; j < span[1].count; ++j)
-        for (int l = 0; l < span[2].count; ++l) {
-          const auto x = static_cast<std::size_t>((span[0].first + i) % reach.cells);
-          const auto y = static_cast<std::size_t>((span[1].first + j) % reach.cells);
-          const auto z = static_cast<std::size_t>((span[2].first + l) % reach.cells);
-          reach.marked[(x * n + y) * n + z] = 1;
-        }
-  }
-}
-
-// Whether a piece's cube (as its last refit left it), grown by the reach, overlaps a marked
-// cell.
-bool within_reach(const StepContext::RefitReach& reach, const TreeNode& piece) {
-  const double extent = 0.5 * piece.side + reach.radius;
-  CellSpan span[3];
-  for (int k = 0; k < 3; ++k)
-    span[k] = cell_span(piece.centre[k] - extent, piece.centre[k] + extent, reach.cell, reach.cells);
-  const auto n = static_cast<std::size_t>(reach.cells);
-  for (int i = 0; i < span[0].count; ++i)
-    for (int j = 0; j < span[1].count; ++j)
-      for (int l = 0; l < span[2].count; ++l) {
-        const auto x = static_cast<std::size_t>((span[0].first + i) % reach.cells);
-        const auto y = static_cast<std::size_t>((span[1].first + j) % reach.cells);
-        const auto z = static_cast<std::size_t>((span[2].first + l) % reach.cells);
-        if (reach.marked[(x * n + y) * n + z] != 0) return true;
-      }
-  return false;
-}
-}  // namespace
-
 void plan_tree_update(StepContext& ctx) {
   using U = StepContext::TreeUpdate;
-  ctx.refit_reach.cells = 0;
   if (ctx.tree_current) {
     ctx.tree_update = U::keep;
     ctx.tree_current = false;  // the next run follows moved particles
   } else {
     const bool fits = ctx.tree && !ctx.tree->loose() && ctx.tree->size() == ctx.gas.size() + ctx.dm.size();
     ctx.tree_update = fits ? U::refit : U::build;
-    if (fits) plan_refit_reach(ctx);
   }
 }
 
@@ -164,16 +81,11 @@ void refit_tree_group(StepContext& ctx, int g) {
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n_gas = gas.size();
   const double eps_gas = ctx.softening_gas();
-  auto fetch = [&](std::size_t i) {
+  ctx.tree->refit_group(g, [&](std::size_t i) {
     if (i < n_gas) return GravityTree::RefitSource{gas.x[i], gas.dynamical_mass(i), eps_gas};
     const std::size_t j = i - n_gas;
     return GravityTree::RefitSource{dm.x[j], dm.mass[j], ctx.softening_of(j)};
-  };
-  const StepContext::RefitReach& reach = ctx.refit_reach;
-  if (reach.cells == 0)
-    ctx.tree->refit_group(g, fetch);
-  else
-    ctx.tree->refit_group(g, fetch, [&](const TreeNode& piece) { return within_reach(reach, piece); });
+  });
 }
 
 void finish_tree(StepContext& ctx) {

@@ -125,21 +125,17 @@ void GravityTree::store_source(std::int32_t k, std::int32_t i, const RefitSource
   spline_inv_f_[u] = 1.0f / spline_f_[u];
 }
 
-// Subtrees of at most 1/kPieces of the particles become pieces (a leaf is one whatever its
-// size); the nodes above them are refitted last. Pieces are dealt to groups in
+// Subtrees of at most 1/(2 kRefitGroups) of the particles become pieces (a leaf is one
+// whatever its size); the nodes above them are refitted last. Pieces are dealt to groups in
 // preorder, a group closing once it holds its share of the particles.
 void GravityTree::plan_refit_groups() {
   pieces_.clear();
   top_nodes_.clear();
   group_start_.fill(0);
   group_loose_.fill(false);
-  stale_.assign(nodes_.size(), 0);
-  any_stale_ = false;
   if (nodes_.empty()) return;
   const std::int64_t n = static_cast<std::int64_t>(index_.size());
-  // Small pieces, so that a partial refit can leave most of the box out; never smaller than
-  // the walk's direct nodes, so that a stale node above them is always one the walk opens.
-  const std::int64_t piece_size = std::max<std::int64_t>(kMinPieceSize, n / kPieces);
+  const std::int64_t piece_size = std::max<std::int64_t>(1, n / (2 * kRefitGroups));
   for (std::int32_t k = 0; k < static_cast<std::int32_t>(nodes_.size());) {
     const TreeNode& node = nodes_[static_cast<std::size_t>(k)];
     if (node.first_child < 0 || node.count <= piece_size) {
@@ -178,24 +174,7 @@ std::int64_t GravityTree::refit_group_count(int g) const {
 void GravityTree::finish_refit() {
   bool loose = false;
   for (bool l : group_loose_) loose = loose || l;
-  bool any_stale = false;
-  for (std::int32_t p : pieces_) any_stale = any_stale || stale_[static_cast<std::size_t>(p)] != 0;
-  // Bottom-up (top nodes are in preorder): a node is stale if a child is.
-  for (auto t = top_nodes_.rbegin(); t != top_nodes_.rend(); ++t) {
-    loose = node_moments(*t) || loose;
-    bool stale = false;
-    if (any_stale) {
-      const TreeNode& node = nodes_[static_cast<std::size_t>(*t)];
-      const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
-      for (std::int32_t c = node.first_child; c >= 0 && c < end && !stale;) {
-        stale = stale_[static_cast<std::size_t>(c)] != 0;
-        const std::int32_t next = nodes_[static_cast<std::size_t>(c)].next;
-        c = next < 0 ? end : next;
-      }
-    }
-    stale_[static_cast<std::size_t>(*t)] = stale ? kStaleAbove : 0;
-  }
-  any_stale_ = any_stale;
+  for (auto t = top_nodes_.rbegin(); t != top_nodes_.rend(); ++t) loose = node_moments(*t) || loose;
   loose_ = loose;
 }
 

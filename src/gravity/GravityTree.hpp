@@ -99,43 +99,21 @@ class GravityTree {
     double mass;
     double softening;
   };
-  //
-  // A TreePM step whose few active particles read only what lies within the cut-off of them
-  // may leave the rest out: refit_group(g, fetch, wanted) refits only the pieces whose root
-  // `wanted` accepts (given the root's cube as the last refit left it) and leaves the others
-  // *stale*, moments and sources as they were. The caller must want every piece whose
-  // particles can now lie within the cut-off of a target, so that a walk never reaches a stale
-  // one (it throws std::logic_error if it does); the nodes above a stale piece are refitted
-  // from what their pieces hold, and a walk always opens them rather than accept them. The
-  // walks then read only nodes and sources a full refit would have given them.
   template <class Fetch>
   void refit_group(int g, const Fetch& fetch) {
-    refit_group(g, fetch, [](const TreeNode&) { return true; });
-  }
-  template <class Fetch, class Wanted>
-  void refit_group(int g, const Fetch& fetch, const Wanted& wanted) {
-    bool loose = false, fresh_only = true;
+    bool loose = false;
     for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p) {
       const std::int32_t root = pieces_[static_cast<std::size_t>(p)];
       const TreeNode& node = nodes_[static_cast<std::size_t>(root)];
-      if (!wanted(node)) {
-        stale_[static_cast<std::size_t>(root)] = kStalePiece;
-        fresh_only = false;
-        continue;
-      }
-      stale_[static_cast<std::size_t>(root)] = 0;
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const std::int32_t i = index_[static_cast<std::size_t>(k)];
         store_source(k, i, fetch(static_cast<std::size_t>(i)));
       }
       loose = piece_moments(root) || loose;
     }
-    // A group with stale pieces keeps a looseness it had (a stale piece may hold a loose node).
-    group_loose_[static_cast<std::size_t>(g)] = fresh_only ? loose : loose || group_loose_[static_cast<std::size_t>(g)];
+    group_loose_[static_cast<std::size_t>(g)] = loose;
   }
   void finish_refit();
-  // Whether the last refit left some piece stale.
-  bool partial() const { return any_stale_; }
   // Particles in refit group g.
   std::int64_t refit_group_count(int g) const;
 
@@ -215,14 +193,6 @@ class GravityTree {
   std::array<std::int32_t, kRefitGroups + 1> group_start_{};
   std::array<bool, kRefitGroups> group_loose_{};
   bool loose_ = false;
-  // Per node: kStalePiece for a stale piece's root, kStaleAbove for a node above one (see
-  // refit_group), 0 for the rest.
-  static constexpr std::uint8_t kStalePiece = 1, kStaleAbove = 2;
-  std::vector<std::uint8_t> stale_;
-  // Pieces: about 1/kPieces of the particles each, at least kMinPieceSize (above the walk's
-  // direct-node size, so that the walk always opens a node above pieces).
-  static constexpr std::int64_t kPieces = 256, kMinPieceSize = 64;
-  bool any_stale_ = false;
 };
 
 }  // namespace fountain::gravity

@@ -110,14 +110,6 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
       n = node.next;  // beyond the short-range force: the mesh has it
       continue;
     }
-    if (any_stale_ && stale_[static_cast<std::size_t>(n)] != 0) {
-      // A partial refit (refit_group) left this node's moments stale: above a stale piece it
-      // is opened, never accepted; a stale piece itself must lie beyond every target's reach.
-      if (stale_[static_cast<std::size_t>(n)] == kStalePiece)
-        throw std::logic_error("GravityTree: a walk reached a piece its partial refit left stale");
-      n = node.first_child;
-      continue;
-    }
     // A node beyond every pair's spline length from the whole box takes the Newtonian
     // expansion; one within it (softened_nodes) the softened one, judged by the same criterion
     // (the softened field's derivatives are no larger than the Newtonian ones at the same

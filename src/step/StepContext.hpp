@@ -1,11 +1,9 @@
 // What every task of a step needs: the particles, the cells, the parameters and the clock.
 #pragma once
 #include <atomic>
-#include <cstdint>
 #include <limits>
 
 #include <memory>
-#include <vector>
 
 #include "core/ForEach.hpp"
 #include "particles/CollisionlessParticles.hpp"
@@ -54,20 +52,6 @@ struct StepContext {
   // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
   enum class TreeUpdate { keep, refit, build };
   TreeUpdate tree_update = TreeUpdate::build;
-  // A TreePM refit of part of the tree (gravity::plan_tree_update): a periodic grid of
-  // `cells`^3 marking where the active leaves lie (their boxes grown by how far their
-  // particles may have moved), and the distance from them within which the tree must be
-  // current. No cells: the whole tree is refitted.
-  struct RefitReach {
-    int cells = 0;
-    double cell = 0.0;
-    std::vector<std::uint8_t> marked;
-    double radius = 0.0;
-  };
-  RefitReach refit_reach{};
-  // The largest distance any particle will have moved since the last rebuild once drifted to
-  // ti_current (Engine::prepare_step).
-  double moved_most = 0.0;
 
   // Periodic boxes: the long-range mesh and its forces (TreePM); null for open boundaries.
   std::unique_ptr<gravity::LongRangeForce> long_range{};
