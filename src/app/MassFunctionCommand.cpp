@@ -3,7 +3,6 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -27,9 +26,7 @@ std::string write_mass_function(const MassFunctionRequest& request) {
   if (omega_b >= halos.omega_m)
     throw InputError(fmt::format("Omega_b = {} must be below the catalogue's Omega0 = {}", omega_b, halos.omega_m));
   const cosmology::CosmologyParams c{halos.omega_m, halos.omega_lambda, omega_b, halos.hubble_param};
-  const auto kind = request.transfer == "no_wiggle"     ? cosmology::TransferKind::no_wiggle
-                    : request.transfer == "zero_baryon" ? cosmology::TransferKind::zero_baryon
-                                                        : cosmology::TransferKind::full;
+  const cosmology::TransferKind kind = cosmology::transfer_kind_named(request.transfer);
   // The model works in Msun/h and Mpc/h; the catalogue in its snapshot's units.
   const Units reference;
   const double to_msun_h = halos.units.mass_cgs / reference.mass_cgs;

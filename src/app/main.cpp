@@ -1,8 +1,11 @@
 // The fountain command line: run a parameter file, write example ICs, print the parameter reference.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <exception>
+#include <iterator>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -10,6 +13,7 @@
 #include "app/IcCommand.hpp"
 #include "app/MassFunctionCommand.hpp"
 #include "app/Simulation.hpp"
+#include "cosmology/TransferFunction.hpp"
 #include "core/Error.hpp"
 #include "params/ParameterFile.hpp"
 #include "params/ParameterSchema.hpp"
@@ -53,6 +57,8 @@ int main(int argc, char** argv) {
 
   auto* ic = app.add_subcommand("ic", "Write the initial conditions of a validation problem");
   IcRequest request;
+  const std::vector<std::string> transfer_names(std::begin(cosmology::kTransferKindNames),
+                                                std::end(cosmology::kTransferKindNames));
   ic->add_option("problem", request.problem, "sod | sedov | gresho | evrard | sphere | cosmo | zoom")
       ->required()
       ->check(CLI::IsMember({"sod", "sedov", "gresho", "evrard", "sphere", "cosmo", "zoom"}));
@@ -88,7 +94,7 @@ int main(int argc, char** argv) {
       ic->add_option("--sigma-8", cosmo.sigma_8, "cosmo: sigma_8 of the linear spectrum at z = 0")->capture_default_str(),
       ic->add_option("--n-s", cosmo.n_s, "cosmo: spectral index")->capture_default_str(),
       ic->add_option("--transfer", transfer, "cosmo: Eisenstein & Hu fit: full | no_wiggle | zero_baryon")
-          ->check(CLI::IsMember({"full", "no_wiggle", "zero_baryon"}))
+          ->check(CLI::IsMember(transfer_names))
           ->capture_default_str(),
       ic->add_option("--lpt", cosmo.lpt_order, "cosmo: Lagrangian perturbation order, 1 (Zel'dovich) or 2")
           ->check(CLI::IsMember({1, 2}))
@@ -145,7 +151,7 @@ int main(int argc, char** argv) {
                             "Omega_b of their transfer function (default: the catalogue's OmegaBaryon, else 0.04)")
       ->check(CLI::Range(0.0, 1.0));
   mass_function->add_option("--transfer", mf_request.transfer, "Their Eisenstein & Hu fit: full | no_wiggle | zero_baryon")
-      ->check(CLI::IsMember({"full", "no_wiggle", "zero_baryon"}))
+      ->check(CLI::IsMember(transfer_names))
       ->capture_default_str();
   mass_function->add_option("--log-min", mf_request.log_min, "Lowest bin edge, log10(M / (Msun/h))")->capture_default_str();
   mass_function->add_option("--log-max", mf_request.log_max, "Highest bin edge")->capture_default_str();
@@ -175,8 +181,8 @@ int main(int argc, char** argv) {
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
   if (is_unknown_command(argc, argv)) {
-    fmt::print(stderr, "error: unknown command '{}': expected one of run, ic, fof, hop, mass-function, params (fountain --help explains them)\n",
-               argv[1]);
+    fmt::print(stderr, "error: unknown command '{}': expected one of {} (fountain --help explains them)\n",
+               argv[1], fmt::join(kCommands, ", "));
     return 2;
   }
   try {
@@ -262,9 +268,7 @@ int main(int argc, char** argv) {
           throw InputError("option --gamma does not apply to cosmo: comoving runs take gamma = 5/3");
         cosmo.a_start = 1.0 / (1.0 + z_start);
         cosmo.gas = !no_gas;
-        cosmo.transfer = transfer == "no_wiggle"     ? cosmology::TransferKind::no_wiggle
-                         : transfer == "zero_baryon" ? cosmology::TransferKind::zero_baryon
-                                                     : cosmology::TransferKind::full;
+        cosmo.transfer = cosmology::transfer_kind_named(transfer);
       }
       if ((request.problem == "sphere" || request.problem == "evrard") && gamma_opt->count() > 0)
         throw InputError(fmt::format("option --gamma does not apply to {}: its initial conditions do not depend on "

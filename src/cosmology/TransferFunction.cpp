@@ -2,8 +2,16 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+#include <string>
 
 namespace fountain::cosmology {
+
+TransferKind transfer_kind_named(std::string_view name) {
+  for (std::size_t k = 0; k < std::size(kTransferKindNames); ++k)
+    if (name == kTransferKindNames[k]) return static_cast<TransferKind>(k);
+  throw std::invalid_argument("unknown transfer function '" + std::string(name) + "'");
+}
 
 namespace {
 

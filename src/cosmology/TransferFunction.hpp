@@ -1,11 +1,17 @@
 // Eisenstein & Hu (1998) matter transfer functions: the full fit with baryon wiggles, the no-wiggle and the zero-baryon forms.
 #pragma once
 
+#include <string_view>
+
 #include "cosmology/Background.hpp"
 
 namespace fountain::cosmology {
 
 enum class TransferKind { full, no_wiggle, zero_baryon };
+// The kinds' names on the command line and in files, in the enum's order.
+inline constexpr const char* kTransferKindNames[] = {"full", "no_wiggle", "zero_baryon"};
+// The kind of a name among kTransferKindNames; any other name throws std::invalid_argument.
+TransferKind transfer_kind_named(std::string_view name);
 
 class EisensteinHu {
  public:
