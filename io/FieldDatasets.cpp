@@ -4,7 +4,7 @@ namespace fountain::io {
 
 namespace {
 template <class T>
-std::vector<std::int32_t> as_int32(const std::vector<T>& v) {
+std::vector<std::int32_t> as_int32(std::span<const T> v) {
   std::vector<std::int32_t> out(v.size());
   for (std::size_t k = 0; k < v.size(); ++k) out[k] = static_cast<std::int32_t>(v[k]);
   return out;
@@ -28,13 +28,36 @@ void write_field(hdf5::File& f, const std::string& dataset, const std::vector<st
   f.write_dataset(dataset, std::vector<std::uint64_t>(v.begin(), v.end()));
 }
 void write_field(hdf5::File& f, const std::string& dataset, const std::vector<TimeBin>& v) {
-  f.write_dataset(dataset, as_int32(v));
+  f.write_dataset(dataset, as_int32(std::span<const TimeBin>(v)));
 }
 void write_field(hdf5::File& f, const std::string& dataset, const std::vector<std::uint8_t>& v) {
-  f.write_dataset(dataset, as_int32(v));
+  f.write_dataset(dataset, as_int32(std::span<const std::uint8_t>(v)));
 }
 void write_field(hdf5::File& f, const std::string& dataset, const std::vector<Species>& v) {
-  f.write_dataset(dataset, as_int32(v));
+  f.write_dataset(dataset, as_int32(std::span<const Species>(v)));
+}
+
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const double> v) {
+  f.write_rows(dataset, first, v);
+}
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const Vec3> v) {
+  f.write_rows(dataset, first, std::span<const double>(reinterpret_cast<const double*>(v.data()), 3 * v.size()), 3);
+}
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const std::uint64_t> v) {
+  f.write_rows(dataset, first, v);
+}
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const std::int64_t> v) {
+  const std::vector<std::uint64_t> out(v.begin(), v.end());
+  f.write_rows(dataset, first, std::span<const std::uint64_t>(out));
+}
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const TimeBin> v) {
+  f.write_rows(dataset, first, std::span<const std::int32_t>(as_int32(v)));
+}
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const std::uint8_t> v) {
+  f.write_rows(dataset, first, std::span<const std::int32_t>(as_int32(v)));
+}
+void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t first, std::span<const Species> v) {
+  f.write_rows(dataset, first, std::span<const std::int32_t>(as_int32(v)));
 }
 
 void read_field(const hdf5::File& f, const std::string& dataset, std::vector<double>& v) { v = f.read_doubles(dataset); }

@@ -9,6 +9,8 @@
 #include <sstream>
 #include <system_error>
 
+#include <fmt/format.h>
+
 #include "core/Error.hpp"
 
 namespace fountain::io::hdf5 {
@@ -481,6 +483,43 @@ void File::write_pieces(const std::string& dataset, hid_t file_type, hid_t memor
   if (ds.close() < 0) fail(dataset, "cannot close dataset (disk full?)");
 }
 
+void File::create_rows_dataset(const std::string& dataset, RowType type, std::size_t rows, std::size_t columns) {
+  const hid_t file_type = type == RowType::float64 ? H5T_IEEE_F64LE
+                          : type == RowType::uint64 ? H5T_STD_U64LE
+                                                    : H5T_STD_I32LE;
+  Id ds = create_dataset(dataset, file_type, columns == 1 ? std::vector<hsize_t>{rows} : std::vector<hsize_t>{rows, columns});
+  if (ds.close() < 0) fail(dataset, "cannot close dataset (disk full?)");
+}
+
+void File::write_rows_of(const std::string& dataset, hid_t memory_type, std::size_t first, std::size_t rows,
+                         std::size_t columns, const void* data) {
+  if (rows == 0) return;
+  Id ds = open_dataset(dataset);
+  const hsize_t start[2] = {first, 0}, size[2] = {rows, columns};
+  const hsize_t elements = rows * columns;
+  Id file_space(H5Dget_space(ds.get()), H5Sclose);
+  Id memory_space(H5Screate_simple(1, &elements, nullptr), H5Sclose);
+  if (!file_space.valid() || !memory_space.valid() ||
+      H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start, nullptr, size, nullptr) < 0)
+    fail(dataset, fmt::format("cannot select rows {} to {}", first, first + rows));
+  if (H5Dwrite(ds.get(), memory_type, memory_space.get(), file_space.get(), H5P_DEFAULT, data) < 0)
+    fail(dataset, "cannot write data (disk full?)");
+  if (ds.close() < 0) fail(dataset, "cannot close dataset (disk full?)");
+}
+
+void File::write_rows(const std::string& dataset, std::size_t first, std::span<const double> values,
+                      std::size_t columns) {
+  write_rows_of(dataset, H5T_NATIVE_DOUBLE, first, values.size() / columns, columns, values.data());
+}
+
+void File::write_rows(const std::string& dataset, std::size_t first, std::span<const std::uint64_t> values) {
+  write_rows_of(dataset, H5T_NATIVE_UINT64, first, values.size(), 1, values.data());
+}
+
+void File::write_rows(const std::string& dataset, std::size_t first, std::span<const std::int32_t> values) {
+  write_rows_of(dataset, H5T_NATIVE_INT32, first, values.size(), 1, values.data());
+}
+
 void File::write_dataset_in_pieces(const std::string& dataset, std::size_t rows, std::size_t columns,
                                    const DoublePieceFill& fill) {
   write_pieces<double>(dataset, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, rows, columns, fill);
@@ -591,40 +630,71 @@ void File::write_attribute(const std::string& object, const std::string& name,
 
 // --- Helpers shared by the GADGET/SWIFT-layout writers ---------------------------------------
 
-void write_file_atomically(const std::string& path, const std::string& what,
-                           const std::function<void(File&)>& fill) {
+AtomicFile::AtomicFile(std::string path, std::string what)
+    : path_(std::move(path)), tmp_(path_ + ".tmp"), prefix_("cannot create " + what + " " + path_ + ": ") {
   namespace fs = std::filesystem;
-  const std::string prefix = "cannot create " + what + " " + path + ": ";
-  if (path.empty()) throw InputError("cannot create " + what + ": empty file name");
+  if (path_.empty()) throw InputError("cannot create " + what + ": empty file name");
   std::error_code ec;
-  fs::path parent = fs::path(path).parent_path();
+  fs::path parent = fs::path(path_).parent_path();
   if (parent.empty()) parent = ".";
-  if (!fs::exists(parent, ec)) throw InputError(prefix + "folder " + parent.string() + " does not exist");
-  if (!fs::is_directory(parent, ec)) throw InputError(prefix + parent.string() + " is not a folder");
+  if (!fs::exists(parent, ec)) throw InputError(prefix_ + "folder " + parent.string() + " does not exist");
+  if (!fs::is_directory(parent, ec)) throw InputError(prefix_ + parent.string() + " is not a folder");
   if (::access(parent.c_str(), W_OK | X_OK) != 0)
-    throw InputError(prefix + "folder " + parent.string() + " is not writable");
-  if (fs::is_directory(path, ec)) throw InputError(prefix + "a folder of that name exists");
+    throw InputError(prefix_ + "folder " + parent.string() + " is not writable");
+  if (fs::is_directory(path_, ec)) throw InputError(prefix_ + "a folder of that name exists");
+  write([&](File&) {});
+}
 
-  const std::string tmp = path + ".tmp";
+AtomicFile::~AtomicFile() {
+  if (!file_) return;
+  file_.reset();  // closes; a failure here has nothing left to report
+  std::error_code ec;
+  std::filesystem::remove(tmp_, ec);
+}
+
+void AtomicFile::write(const std::function<void(File&)>& part) {
   std::string reason;
   try {
-    File file(tmp, File::Mode::create);
-    fill(file);
-    file.close();
+    if (!file_) file_ = std::make_unique<File>(tmp_, File::Mode::create);
+    part(*file_);
+  } catch (const std::exception& e) {
+    reason = e.what();
+    if (reason.empty()) reason = "unknown error";
+  }
+  if (!reason.empty()) fail(std::move(reason));
+}
+
+void AtomicFile::commit() {
+  std::string reason;
+  try {
+    if (file_) file_->close();
+    file_.reset();
   } catch (const std::exception& e) {
     reason = e.what();
     if (reason.empty()) reason = "unknown error";
   }
   if (reason.empty()) {
-    fs::rename(tmp, path, ec);
-    if (ec) reason = "cannot rename " + tmp + " to " + path + ": " + ec.message();
+    std::error_code ec;
+    std::filesystem::rename(tmp_, path_, ec);
+    if (ec) reason = "cannot rename " + tmp_ + " to " + path_ + ": " + ec.message();
   }
-  if (!reason.empty()) {
-    fs::remove(tmp, ec);
-    // Messages from File start with the temporary file's name; the prefix already says it.
-    if (reason.rfind(tmp + ": ", 0) == 0) reason = reason.substr(tmp.size() + 2);
-    throw InputError(prefix + reason);
-  }
+  if (!reason.empty()) fail(std::move(reason));
+}
+
+void AtomicFile::fail(std::string reason) {
+  file_.reset();
+  std::error_code ec;
+  std::filesystem::remove(tmp_, ec);
+  // Messages from File start with the temporary file's name; the prefix already says it.
+  if (reason.rfind(tmp_ + ": ", 0) == 0) reason = reason.substr(tmp_.size() + 2);
+  throw InputError(prefix_ + reason);
+}
+
+void write_file_atomically(const std::string& path, const std::string& what,
+                           const std::function<void(File&)>& fill) {
+  AtomicFile file(path, what);
+  file.write(fill);
+  file.commit();
 }
 
 void write_gadget_header(File& file, const std::array<std::uint64_t, 6>& counts, const std::vector<double>& box_size,

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <utility>
@@ -139,6 +140,15 @@ class File {
   void write_dataset_in_pieces(const std::string& dataset, std::size_t rows, std::size_t columns,
                                const DoublePieceFill& fill);
   void write_dataset_in_pieces(const std::string& dataset, std::size_t rows, const IdPieceFill& fill);
+  // Datasets whose rows arrive in runs from several sources (a snapshot gathered from MPI
+  // ranks): created whole first, then written a run of rows at a time, in any order. Float64
+  // rows of `columns` values (rank 1 where that is 1), uint64 or int32 scalars; the file holds
+  // the same dataset as write_dataset's of the whole array.
+  enum class RowType { float64, uint64, int32 };
+  void create_rows_dataset(const std::string& dataset, RowType type, std::size_t rows, std::size_t columns = 1);
+  void write_rows(const std::string& dataset, std::size_t first, std::span<const double> values, std::size_t columns = 1);
+  void write_rows(const std::string& dataset, std::size_t first, std::span<const std::uint64_t> values);
+  void write_rows(const std::string& dataset, std::size_t first, std::span<const std::int32_t> values);
   // Two-dimensional tables, row-major, `columns` values per row (GADGET's GroupMassType).
   void write_table(const std::string& dataset, const std::vector<double>& values, std::size_t columns,
                    const StringAttributes& attributes = {});
@@ -175,6 +185,8 @@ class File {
   template <class T>
   void write_pieces(const std::string& dataset, hid_t file_type, hid_t memory_type, std::size_t rows,
                     std::size_t columns, const std::function<void(std::size_t, std::span<T>)>& fill);
+  void write_rows_of(const std::string& dataset, hid_t memory_type, std::size_t first, std::size_t rows,
+                     std::size_t columns, const void* data);
   void write_numeric_attribute(const std::string& object, const std::string& name, hid_t file_type,
                                hid_t memory_type, const std::vector<hsize_t>& dims, const void* data);
 
@@ -191,6 +203,26 @@ class File {
 // reported as such before anything is created.
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<void(File&)>& fill);
+
+// The same in steps, for a file written over a while (a snapshot whose particles arrive from
+// other ranks): the constructor checks the folder and creates `path` + ".tmp", write() runs
+// each part of the filling, commit() closes and renames. A failure in any of them, or
+// destruction before commit(), removes the temporary file; the failures throw InputError
+// "cannot create <what> <path>: <reason>".
+class AtomicFile {
+ public:
+  AtomicFile(std::string path, std::string what);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+  void write(const std::function<void(File&)>& part);
+  void commit();
+
+ private:
+  [[noreturn]] void fail(std::string reason);
+  std::string path_, tmp_, prefix_;
+  std::unique_ptr<File> file_;
+};
 
 // Writes the GADGET-2 style /Header group for `counts[t]` particles of each type t:
 // NumPart_ThisFile (uint32[6], uint64[6] if a count is >= 2^32), NumPart_Total (uint32[6], low

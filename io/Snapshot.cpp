@@ -26,8 +26,11 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -250,58 +253,110 @@ void check_sizes(const Store& p, const SnapshotInfo& info, bool stars, const cha
 
 // Positions as a snapshot stores them: in a periodic box, each particle's image in [0, L)
 // (a particle drifts out of the box between the recuts that fold it back).
-std::vector<Vec3> positions_in_box(std::vector<Vec3> x, const SnapshotInfo& info) {
+std::vector<Vec3> positions_in_box(std::span<const Vec3> held, const SnapshotInfo& info) {
+  std::vector<Vec3> x(held.begin(), held.end());
   if (info.periodic)
     for (Vec3& p : x) p = wrap_into_box(p, info.box_size);
   return x;
 }
 
-// The table's snapshot fields of `p` as datasets of `group`: every particle, or those of `pick`.
+// The header groups every snapshot has: /Header (and a comoving run's /Cosmology), /Units,
+// /Parameters, /Code.
+void write_header_groups(File& file, const SnapshotInfo& info, const SnapshotCounts& counts) {
+  const Units& units = info.units;
+  const Vec3& b = info.box_size;
+  const bool cubic = b.x == b.y && b.y == b.z;
+
+  hdf5::write_gadget_header(file, {counts.gas, counts.dark_matter, counts.low_res, 0, counts.stars, 0},
+                            cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z}, info.time,
+                            info.cosmology ? &*info.cosmology : nullptr);
+  if (info.cosmology) {
+    // SWIFT's /Cosmology group.
+    const cosmology::CosmologyParams& c = *info.cosmology;
+    file.create_group("/Cosmology");
+    file.write_attribute("/Cosmology", "Cosmological run", 1);
+    file.write_attribute("/Cosmology", "Scale-factor", info.time);
+    file.write_attribute("/Cosmology", "Redshift", 1.0 / info.time - 1.0);
+    file.write_attribute("/Cosmology", "Omega_m", c.omega_m);
+    file.write_attribute("/Cosmology", "Omega_lambda", c.omega_lambda);
+    file.write_attribute("/Cosmology", "Omega_b", c.omega_b);
+    file.write_attribute("/Cosmology", "Omega_k", c.omega_k());
+    file.write_attribute("/Cosmology", "h", c.hubble_param);
+  }
+  file.write_attribute("/Header", "Code", "Fountain");
+  file.write_attribute("/Header", "Periodic", info.periodic ? 1 : 0);
+  file.write_attribute("/Header", "Step", static_cast<std::int64_t>(info.step));
+
+  // /Units (SWIFT names, 1-element arrays as SWIFT writes them; plus the GADGET names)
+  file.create_group("/Units");
+  file.write_attribute("/Units", "Unit length in cgs (U_L)", std::vector<double>{units.length_cgs});
+  file.write_attribute("/Units", "Unit mass in cgs (U_M)", std::vector<double>{units.mass_cgs});
+  file.write_attribute("/Units", "Unit time in cgs (U_t)", std::vector<double>{units.time_cgs()});
+  file.write_attribute("/Units", "Unit current in cgs (U_I)", std::vector<double>{1.0});
+  file.write_attribute("/Units", "Unit temperature in cgs (U_T)", std::vector<double>{1.0});
+  file.write_attribute("/Units", "UnitLength_in_cm", units.length_cgs);
+  file.write_attribute("/Units", "UnitMass_in_g", units.mass_cgs);
+  file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", units.velocity_cgs);
+
+  // /Parameters: one string attribute per key, and the whole YAML text as a dataset
+  file.create_group("/Parameters");
+  for (const auto& [key, value] : flatten_yaml(info.parameters_yaml)) file.write_attribute("/Parameters", key, value);
+  file.write_string_dataset("/Parameters/YAML", info.parameters_yaml);
+
+  // /Code
+  file.create_group("/Code");
+  file.write_attribute("/Code", "Code", "Fountain");
+  file.write_attribute("/Code", "Git Revision", info.git_revision);
+  file.write_attribute("/Code", "Build options", info.build_options);
+  unsigned major = 0, minor = 0, release = 0;
+  H5get_libversion(&major, &minor, &release);
+  file.write_attribute("/Code", "HDF5 library version", fmt::format("{}.{}.{}", major, minor, release));
+}
+
+// The datasets of a group of `rows` particles of `Store`'s kind, with their unit attributes
+// (the values come later, in runs of rows).
 template <class Store>
-void write_fields(File& file, const std::string& group, const Store& p, const std::vector<std::size_t>* pick,
-                  const SnapshotInfo& info, bool stars) {
-  for_each_field_of(p, [&](const FieldInfo& field, const auto& values) {
+void create_group_datasets(File& file, const std::string& group, std::size_t rows, const SnapshotInfo& info,
+                           bool stars) {
+  const Store like;
+  file.create_group(group);
+  for_each_field_of(like, [&](const FieldInfo& field, const auto& values) {
     if (!written(field.snapshot, info, stars)) return;
-    using Values = std::decay_t<decltype(values)>;
-    Values picked;
-    if (pick != nullptr) {
-      picked.reserve(pick->size());
-      for (std::size_t i : *pick) picked.push_back(values[i]);
-    }
-    const Values& out = pick != nullptr ? picked : values;
     const std::string dataset = group + "/" + field.name;
-    // Positions are folded into the box; a comoving run's velocities and energies converted.
-    if constexpr (std::is_same_v<Values, std::vector<Vec3>>) {
-      if (&values == &p.x) {
-        write_field(file, dataset, positions_in_box(out, info));
-      } else {
-        write_field(file, dataset, stored_values(out, field.name, field.units, info));
-      }
-    } else if constexpr (std::is_same_v<Values, std::vector<double>>) {
-      write_field(file, dataset, stored_values(out, field.name, field.units, info));
-    } else {
-      write_field(file, dataset, out);
-    }
+    create_field(file, dataset, rows, values);
     write_dataset_units(file, dataset, info, field.units, field.description);
   });
 }
 
-// The particles of one species as a GADGET PartType group.
-void write_collisionless(File& file, const std::string& group, const CollisionlessParticles& p, Species species,
-                         const SnapshotInfo& info) {
-  std::vector<std::size_t> pick;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (p.species[i] == species) pick.push_back(i);
-  file.create_group(group);
-  write_fields(file, group, p, &pick, info, species == Species::Star);
+// The table's snapshot fields of the particles `pick` (indices into `p`) as rows `row` on of
+// `group`'s datasets.
+template <class Store>
+void write_group_rows(File& file, const std::string& group, const Store& p, std::span<const std::size_t> pick,
+                      std::size_t row, const SnapshotInfo& info, bool stars) {
+  for_each_field_of(p, [&](const FieldInfo& field, const auto& values) {
+    if (!written(field.snapshot, info, stars)) return;
+    using Value = typename std::decay_t<decltype(values)>::value_type;
+    std::vector<Value> picked;
+    picked.reserve(pick.size());
+    for (std::size_t i : pick) picked.push_back(values[i]);
+    const std::string dataset = group + "/" + field.name;
+    // Positions are folded into the box; a comoving run's velocities and energies converted.
+    if constexpr (std::is_same_v<Value, Vec3>) {
+      if (&values == &p.x) {
+        write_field_rows(file, dataset, row, std::span<const Vec3>(positions_in_box(picked, info)));
+      } else {
+        write_field_rows(file, dataset, row, std::span<const Vec3>(stored_values(picked, field.name, field.units, info)));
+      }
+    } else if constexpr (std::is_same_v<Value, double>) {
+      write_field_rows(file, dataset, row, std::span<const double>(stored_values(picked, field.name, field.units, info)));
+    } else {
+      write_field_rows(file, dataset, row, std::span<const Value>(picked));
+    }
+  });
 }
 
-void write_snapshot_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
-                         const SnapshotInfo& info) {
-  const std::size_t n = gas.size();
-  const std::size_t n_dm = dm != nullptr ? dm->count(Species::DarkMatter) : 0;
-  const std::size_t n_low = dm != nullptr ? dm->count(Species::LowResDarkMatter) : 0;
-  const std::size_t n_stars = dm != nullptr ? dm->count(Species::Star) : 0;
+void check_stores(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
+                  const SnapshotInfo& info) {
   try {
     check_sizes(gas, info, false, "gas");
     if (dm != nullptr) {
@@ -313,83 +368,127 @@ void write_snapshot_file(const std::string& path, const GasParticles& gas, const
   } catch (const InputError& e) {
     throw InputError("cannot create snapshot " + path + ": " + e.what());
   }
+}
 
-  hdf5::write_file_atomically(path, "snapshot", [&](File& file) {
-    const Units& units = info.units;
-    const Vec3& b = info.box_size;
-    const bool cubic = b.x == b.y && b.y == b.z;
+// The collisionless species in a snapshot, with their groups.
+struct CollisionlessGroup {
+  Species species;
+  const char* group;
+};
+constexpr CollisionlessGroup kCollisionlessGroups[] = {
+    {Species::DarkMatter, "/PartType1"}, {Species::LowResDarkMatter, "/PartType2"}, {Species::Star, "/PartType4"}};
 
-    // /Header
-    hdf5::write_gadget_header(file, {n, n_dm, n_low, 0, n_stars, 0},
-                              cubic ? std::vector<double>{b.x} : std::vector<double>{b.x, b.y, b.z}, info.time,
-                              info.cosmology ? &*info.cosmology : nullptr);
-    if (info.cosmology) {
-      // SWIFT's /Cosmology group.
-      const cosmology::CosmologyParams& c = *info.cosmology;
-      file.create_group("/Cosmology");
-      file.write_attribute("/Cosmology", "Cosmological run", 1);
-      file.write_attribute("/Cosmology", "Scale-factor", info.time);
-      file.write_attribute("/Cosmology", "Redshift", 1.0 / info.time - 1.0);
-      file.write_attribute("/Cosmology", "Omega_m", c.omega_m);
-      file.write_attribute("/Cosmology", "Omega_lambda", c.omega_lambda);
-      file.write_attribute("/Cosmology", "Omega_b", c.omega_b);
-      file.write_attribute("/Cosmology", "Omega_k", c.omega_k());
-      file.write_attribute("/Cosmology", "h", c.hubble_param);
-    }
-    file.write_attribute("/Header", "Code", "Fountain");
-    file.write_attribute("/Header", "Periodic", info.periodic ? 1 : 0);
-    file.write_attribute("/Header", "Step", static_cast<std::int64_t>(info.step));
+std::size_t count_of(const SnapshotCounts& counts, Species s) {
+  return s == Species::DarkMatter ? counts.dark_matter : s == Species::LowResDarkMatter ? counts.low_res : counts.stars;
+}
 
-    // /Units (SWIFT names, 1-element arrays as SWIFT writes them; plus the GADGET names)
-    file.create_group("/Units");
-    file.write_attribute("/Units", "Unit length in cgs (U_L)", std::vector<double>{units.length_cgs});
-    file.write_attribute("/Units", "Unit mass in cgs (U_M)", std::vector<double>{units.mass_cgs});
-    file.write_attribute("/Units", "Unit time in cgs (U_t)", std::vector<double>{units.time_cgs()});
-    file.write_attribute("/Units", "Unit current in cgs (U_I)", std::vector<double>{1.0});
-    file.write_attribute("/Units", "Unit temperature in cgs (U_T)", std::vector<double>{1.0});
-    file.write_attribute("/Units", "UnitLength_in_cm", units.length_cgs);
-    file.write_attribute("/Units", "UnitMass_in_g", units.mass_cgs);
-    file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", units.velocity_cgs);
+}  // namespace
 
-    // /Parameters: one string attribute per key, and the whole YAML text as a dataset
-    file.create_group("/Parameters");
-    for (const auto& [key, value] : flatten_yaml(info.parameters_yaml)) file.write_attribute("/Parameters", key, value);
-    file.write_string_dataset("/Parameters/YAML", info.parameters_yaml);
+struct SnapshotWriter::Impl {
+  std::string path;
+  SnapshotInfo info;
+  SnapshotCounts counts;
+  hdf5::AtomicFile file;
+  std::size_t gas_rows = 0;
+  std::array<std::size_t, 3> collisionless_rows{};  // per kCollisionlessGroups entry
+  std::vector<std::size_t> pick;
+  Impl(const std::string& p, const SnapshotInfo& i, const SnapshotCounts& c)
+      : path(p), info(i), counts(c), file(p, "snapshot") {}
+};
 
-    // /Code
-    file.create_group("/Code");
-    file.write_attribute("/Code", "Code", "Fountain");
-    file.write_attribute("/Code", "Git Revision", info.git_revision);
-    file.write_attribute("/Code", "Build options", info.build_options);
-    unsigned major = 0, minor = 0, release = 0;
-    H5get_libversion(&major, &minor, &release);
-    file.write_attribute("/Code", "HDF5 library version", fmt::format("{}.{}.{}", major, minor, release));
-
+SnapshotWriter::SnapshotWriter(const std::string& path, const SnapshotInfo& info, const SnapshotCounts& counts)
+    : impl_(std::make_unique<Impl>(path, info, counts)) {
+  impl_->file.write([&](File& file) {
+    write_header_groups(file, info, counts);
     // /PartType0: the table's fields, then those worked out from them.
-    file.create_group("/PartType0");
-    write_fields(file, "/PartType0", gas, nullptr, info, false);
-    auto ds = [](const char* name) { return std::string("/PartType0/") + name; };
-    const double gm1 = info.gamma - 1.0;
-    std::vector<double> pressure(n);
-    for (std::size_t i = 0; i < n; ++i) pressure[i] = gm1 * gas.rho[i] * gas.u[i];
-    file.write_dataset(ds(kPressureDataset.name), pressure);
-    write_dataset_units(file, ds(kPressureDataset.name), info, kPressureDataset.units,
+    create_group_datasets<GasParticles>(file, "/PartType0", counts.gas, info, false);
+    file.create_rows_dataset("/PartType0/" + std::string(kPressureDataset.name), hdf5::File::RowType::float64,
+                             counts.gas);
+    write_dataset_units(file, "/PartType0/" + std::string(kPressureDataset.name), info, kPressureDataset.units,
                         fmt::format("{} with gamma = {}", kPressureDataset.description, info.gamma));
     if (info.temperature) {
-      // Of the physical u (a comoving run holds u' = a^(3 (gamma - 1)) u).
-      const double to_physical = info.cosmology ? std::pow(info.time, -3.0 * gm1) : 1.0;
-      std::vector<double> temperature(gas.size());
-      for (std::size_t i = 0; i < gas.size(); ++i) temperature[i] = info.temperature(gas.u[i] * to_physical);
-      file.write_dataset(ds(kTemperatureDataset.name), temperature);
-      write_dataset_units(file, ds(kTemperatureDataset.name), info, kTemperatureDataset.units,
-                          kTemperatureDataset.description);
+      const std::string ds = "/PartType0/" + std::string(kTemperatureDataset.name);
+      file.create_rows_dataset(ds, hdf5::File::RowType::float64, counts.gas);
+      write_dataset_units(file, ds, info, kTemperatureDataset.units, kTemperatureDataset.description);
     }
-
-    // /PartType1 (dark matter) and /PartType4 (stars): MassTable stays 0, masses per particle.
-    if (n_dm > 0) write_collisionless(file, "/PartType1", *dm, Species::DarkMatter, info);
-    if (n_low > 0) write_collisionless(file, "/PartType2", *dm, Species::LowResDarkMatter, info);
-    if (n_stars > 0) write_collisionless(file, "/PartType4", *dm, Species::Star, info);
+    // /PartType1 (dark matter), /PartType2 (lower-resolution dark matter) and /PartType4
+    // (stars): MassTable stays 0, masses per particle.
+    for (const CollisionlessGroup& g : kCollisionlessGroups)
+      if (count_of(counts, g.species) > 0)
+        create_group_datasets<CollisionlessParticles>(file, g.group, count_of(counts, g.species), info,
+                                                      g.species == Species::Star);
   });
+}
+
+SnapshotWriter::~SnapshotWriter() = default;
+
+void SnapshotWriter::add_gas(const GasParticles& gas, std::size_t first, std::size_t count) {
+  Impl& w = *impl_;
+  if (first + count > gas.size() || w.gas_rows + count > w.counts.gas)
+    throw std::logic_error(fmt::format("snapshot {}: {} more gas particles after {} of {}", w.path, count, w.gas_rows,
+                                       w.counts.gas));
+  w.pick.resize(count);
+  for (std::size_t k = 0; k < count; ++k) w.pick[k] = first + k;
+  w.file.write([&](File& file) {
+    write_group_rows(file, "/PartType0", gas, w.pick, w.gas_rows, w.info, false);
+    const double gm1 = w.info.gamma - 1.0;
+    std::vector<double> values(count);
+    for (std::size_t k = 0; k < count; ++k) values[k] = gm1 * gas.rho[first + k] * gas.u[first + k];
+    file.write_rows("/PartType0/" + std::string(kPressureDataset.name), w.gas_rows, std::span<const double>(values));
+    if (w.info.temperature) {
+      // Of the physical u (a comoving run holds u' = a^(3 (gamma - 1)) u).
+      const double to_physical = w.info.cosmology ? std::pow(w.info.time, -3.0 * gm1) : 1.0;
+      for (std::size_t k = 0; k < count; ++k) values[k] = w.info.temperature(gas.u[first + k] * to_physical);
+      file.write_rows("/PartType0/" + std::string(kTemperatureDataset.name), w.gas_rows,
+                      std::span<const double>(values));
+    }
+  });
+  w.gas_rows += count;
+}
+
+void SnapshotWriter::add_collisionless(const CollisionlessParticles& p, std::size_t first, std::size_t count) {
+  Impl& w = *impl_;
+  if (first + count > p.size()) throw std::logic_error(fmt::format("snapshot {}: collisionless particles {} to {} of {}",
+                                                                   w.path, first, first + count, p.size()));
+  for (std::size_t g = 0; g < std::size(kCollisionlessGroups); ++g) {
+    const CollisionlessGroup& group = kCollisionlessGroups[g];
+    w.pick.clear();
+    for (std::size_t i = first; i < first + count; ++i)
+      if (p.species[i] == group.species) w.pick.push_back(i);
+    if (w.pick.empty()) continue;
+    std::size_t& rows = w.collisionless_rows[g];
+    if (rows + w.pick.size() > count_of(w.counts, group.species))
+      throw std::logic_error(fmt::format("snapshot {}: {} more {} particles after {} of {}", w.path, w.pick.size(),
+                                         group.group, rows, count_of(w.counts, group.species)));
+    w.file.write([&](File& file) {
+      write_group_rows(file, group.group, p, w.pick, rows, w.info, group.species == Species::Star);
+    });
+    rows += w.pick.size();
+  }
+}
+
+void SnapshotWriter::close() {
+  Impl& w = *impl_;
+  bool complete = w.gas_rows == w.counts.gas;
+  for (std::size_t g = 0; g < std::size(kCollisionlessGroups); ++g)
+    complete = complete && w.collisionless_rows[g] == count_of(w.counts, kCollisionlessGroups[g].species);
+  if (!complete) throw std::logic_error(fmt::format("snapshot {} closed with {} of {} gas particles written", w.path,
+                                                    w.gas_rows, w.counts.gas));
+  w.file.commit();
+}
+
+namespace {
+
+void write_snapshot_file(const std::string& path, const GasParticles& gas, const CollisionlessParticles* dm,
+                         const SnapshotInfo& info) {
+  check_stores(path, gas, dm, info);
+  SnapshotCounts counts{gas.size(), 0, 0, 0};
+  if (dm != nullptr)
+    counts = {gas.size(), dm->count(Species::DarkMatter), dm->count(Species::LowResDarkMatter), dm->count(Species::Star)};
+  SnapshotWriter writer(path, info, counts);
+  writer.add_gas(gas, 0, gas.size());
+  if (dm != nullptr) writer.add_collisionless(*dm, 0, dm->size());
+  writer.close();
 }
 
 }  // namespace

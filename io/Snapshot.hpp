@@ -1,6 +1,8 @@
 // HDF5 snapshots in the GADGET/SWIFT layout, with units, the parameters used and the git revision.
 #pragma once
+#include <cstddef>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -61,5 +63,33 @@ void write_snapshot(const std::string& path, const GasParticles& gas, const Snap
 // particle).
 void write_snapshot(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                     const SnapshotInfo& info);
+
+// Particles per snapshot group: gas (/PartType0), dark matter (1), lower-resolution dark
+// matter (2), stars (4).
+struct SnapshotCounts {
+  std::size_t gas = 0, dark_matter = 0, low_res = 0, stars = 0;
+};
+
+// A snapshot written as its particles arrive, in the file's order, a run at a time: across
+// MPI ranks rank 0 writes what each leaf's owner sends, so that no rank ever holds every
+// particle. The file is the one write_snapshot writes of the same particles. Under a
+// temporary name until close(), which checks that every particle came; failures throw as
+// write_snapshot's do, and a writer destroyed before close() leaves no file.
+class SnapshotWriter {
+ public:
+  SnapshotWriter(const std::string& path, const SnapshotInfo& info, const SnapshotCounts& counts);
+  ~SnapshotWriter();
+  SnapshotWriter(const SnapshotWriter&) = delete;
+  SnapshotWriter& operator=(const SnapshotWriter&) = delete;
+  // The next gas particles: gas[first .. first + count).
+  void add_gas(const GasParticles& gas, std::size_t first, std::size_t count);
+  // The next collisionless particles, each to its species' group.
+  void add_collisionless(const CollisionlessParticles& p, std::size_t first, std::size_t count);
+  void close();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace fountain::io

@@ -135,7 +135,8 @@ with h5py.File('zero.hdf5', 'w') as f:
     # self-gravity; a rotating sphere with gravity, cooling, MSPH, star formation with spawning
     # and MFB feedback with promotions. mpi_uneven_ranks: a 4 x 1 x 1 top-level grid on 3 ranks
     # (which do not divide it) and 5 (one owns no cell), with the owners chosen anew at every
-    # recut (a repartition in the middle of the run), and cooling on. The leak checker is off: Open MPI's
+    # recut (a repartition in the middle of the run), and cooling on, its snapshots and statistics
+    # gathered to rank 0 40 particles a message. The leak checker is off: Open MPI's
     # own allocations outlive MPI_Finalize.
     mpirun_n() { ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$@"; }
     extra="" ranks="2 3 4"
@@ -153,7 +154,8 @@ domain:
 cooling:
   enabled: true
 output:
-  statistics_every: 4" ;;
+  statistics_every: 4
+  gather_particles: 40" ;;
       mpi_gravity_ranks)
         "$bin" ic evrard -n 6 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Evrard ICs"
         T_END=0.05 extra="gravity:

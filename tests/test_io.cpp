@@ -729,6 +729,70 @@ TEST_F(IoTest, SnapshotWithDarkMatter) {
   EXPECT_EQ(g.read_doubles("/PartType0/Potential"), std::vector<double>(4, 0.0));
 }
 
+TEST_F(IoTest, SnapshotWrittenInPiecesEqualsTheWholeWrite) {
+  // Rank 0 writes a snapshot across MPI ranks from the pieces each rank sends, whose split
+  // must not show in the file: every dataset as write_snapshot writes it, bit for bit.
+  GasParticles gas = make_gas(23, 5);
+  CollisionlessParticles dm = make_dm(17, 1000);
+  for (std::size_t i = 0; i < dm.size(); ++i) {
+    if (i % 3 == 1) dm.species[i] = fountain::Species::Star;
+    if (i % 5 == 2) dm.species[i] = fountain::Species::LowResDarkMatter;
+  }
+  auto info = snapshot_info();
+  info.star_formation = true;
+  info.temperature = [](double u) { return 100.0 * u; };
+  const std::string whole = file("whole.hdf5"), pieces = file("pieces.hdf5");
+  fountain::io::write_snapshot(whole, gas, dm, info);
+  {
+    const fountain::io::SnapshotCounts counts{gas.size(), dm.count(fountain::Species::DarkMatter),
+                                              dm.count(fountain::Species::LowResDarkMatter),
+                                              dm.count(fountain::Species::Star)};
+    fountain::io::SnapshotWriter writer(pieces, info, counts);
+    // Uneven pieces, one empty; the gas from a copy, as a received piece would be.
+    GasParticles copy = gas;
+    writer.add_gas(copy, 0, 1);
+    writer.add_gas(gas, 1, 0);
+    writer.add_gas(copy, 1, 14);
+    writer.add_gas(gas, 15, 8);
+    writer.add_collisionless(dm, 0, 4);
+    writer.add_collisionless(dm, 4, 13);
+    EXPECT_FALSE(fs::exists(pieces)) << "the file appears only once it is complete";
+    writer.close();
+  }
+  File a(whole, File::Mode::read), b(pieces, File::Mode::read);
+  for (const char* group : {"/PartType0", "/PartType1", "/PartType2", "/PartType4"}) {
+    ASSERT_TRUE(a.exists(group)) << group;
+    hid_t ga = H5Gopen2(a.id(), group, H5P_DEFAULT);
+    hsize_t n = 0;
+    H5Gget_num_objs(ga, &n);
+    ASSERT_GT(n, 5u) << group;
+    for (hsize_t k = 0; k < n; ++k) {
+      char name[256];
+      H5Gget_objname_by_idx(ga, k, name, sizeof name);
+      const std::string ds = std::string(group) + "/" + name;
+      const std::vector<double> va = a.read_doubles(ds), vb = b.read_doubles(ds);
+      ASSERT_EQ(va.size(), vb.size()) << ds;
+      EXPECT_EQ(0, std::memcmp(va.data(), vb.data(), va.size() * sizeof(double))) << ds;
+      EXPECT_EQ(a.read_attribute_string(ds, "Description"), b.read_attribute_string(ds, "Description")) << ds;
+    }
+    H5Gclose(ga);
+  }
+  EXPECT_EQ(a.read_attribute_uint64("/Header", "NumPart_ThisFile"), b.read_attribute_uint64("/Header", "NumPart_ThisFile"));
+}
+
+TEST_F(IoTest, SnapshotWriterRefusesMissingOrSurplusParticlesAndLeavesNoFile) {
+  const GasParticles gas = make_gas(10);
+  const std::string path = file("short.hdf5");
+  {
+    fountain::io::SnapshotWriter writer(path, snapshot_info(), {10, 0, 0, 0});
+    writer.add_gas(gas, 0, 6);
+    EXPECT_THROW(writer.add_gas(gas, 6, 5), std::logic_error);  // past the file's 10
+    EXPECT_THROW(writer.close(), std::logic_error);            // 4 never came
+  }
+  EXPECT_FALSE(fs::exists(path));
+  EXPECT_FALSE(fs::exists(path + ".tmp"));
+}
+
 // ---- Restart files --------------------------------------------------------------------------
 
 namespace {

@@ -47,6 +47,26 @@ struct Diagnostics {
   double total_energy() const { return thermal + kinetic + potential; }
 };
 
+// The same sums taken over the particles as they come, a run at a time (across MPI ranks rank 0
+// receives them in pieces): every gas particle first, then every collisionless one, in the
+// run's order, give measure()'s result to the bit.
+class DiagnosticsSum {
+ public:
+  DiagnosticsSum(TemperatureOf temperature, const FigurePhases& phases, double a = 1.0);
+  void add_gas(const GasParticles& gas, std::size_t first, std::size_t count);
+  void add_collisionless(const CollisionlessParticles& p, std::size_t first, std::size_t count);
+  Diagnostics result() const;
+
+ private:
+  TemperatureOf temperature_;
+  FigurePhases phases_;
+  double a_;
+  Diagnostics d_;
+  double h_min_;
+  int bin_min_;
+  std::size_t gas_ = 0, collisionless_ = 0;
+};
+
 // Sums over the current particle state (gas at its predicted values; potentials from the
 // last force computation, zero without gravity). A comoving run's state (scale factor a < 1
 // or not, gamma = 5/3) is measured physically: rho'/a^3, u'/a^2, h = a h', peculiar

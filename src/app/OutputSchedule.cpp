@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <memory>
 
 #include "app/Simulation.hpp"
 
@@ -68,7 +69,20 @@ void SnapshotSeries::write() {
   info_.step = engine_.steps();
   const std::string path =
       fmt::format("{}/{}_{:04d}.hdf5", config_.output.directory, config_.output.basename, written_);
-  if (engine_.rank() == 0) io::write_snapshot(path, engine_.gas(), engine_.dark_matter(), info_);
+  // Rank 0 writes what the particles' owners send it (its own arrays, when they are current).
+  std::unique_ptr<io::SnapshotWriter> writer;
+  if (engine_.rank() == 0) {
+    const CollisionlessParticles& dm = engine_.dark_matter();
+    writer = std::make_unique<io::SnapshotWriter>(
+        path, info_,
+        io::SnapshotCounts{engine_.gas().size(), dm.count(Species::DarkMatter), dm.count(Species::LowResDarkMatter),
+                           dm.count(Species::Star)});
+  }
+  engine_.stream_state([&](const GasParticles& p, std::size_t first, std::size_t n) { writer->add_gas(p, first, n); },
+                       [&](const CollisionlessParticles& p, std::size_t first, std::size_t n) {
+                         writer->add_collisionless(p, first, n);
+                       });
+  if (writer) writer->close();
   if (!quiet_) {
     if (info_.cosmology) {
       fmt::print(stderr, "snapshot {} at a = {:.6g} (z = {:.6g})\n", path, info_.time, 1.0 / info_.time - 1.0);
@@ -113,14 +127,18 @@ StatisticsSeries::StatisticsSeries(const RunConfig& config, Engine& engine, Temp
 }
 
 void StatisticsSeries::write() {
-  engine_.gather_state();  // on every rank alike, though only rank 0 writes
+  // Every rank takes part (the particles' owners send them to rank 0); rank 0 writes.
+  analysis::DiagnosticsSum sum(temperature_, phases_, engine_.scale_factor());
+  engine_.stream_state([&](const GasParticles& p, std::size_t first, std::size_t n) { sum.add_gas(p, first, n); },
+                       [&](const CollisionlessParticles& p, std::size_t first, std::size_t n) {
+                         sum.add_collisionless(p, first, n);
+                       });
   if (!file_) return;
   // Physical units: a comoving run's h-scaled units divided by h (h cancels in the rate).
   const Units units = config_.physical_units();
   const double msun_per_mass = units.mass_cgs / 1.988409870698051e33;
   const double years_per_time = units.time_cgs() / 3.15576e7;
-  analysis::Diagnostics d =
-      analysis::measure(engine_.gas(), engine_.dark_matter(), temperature_, phases_, engine_.scale_factor());
+  analysis::Diagnostics d = sum.result();
   d.radiated = engine_.radiated_energy();
   const auto& sf = engine_.star_formation_total();
   const double elapsed = engine_.cosmic_time() - sf_time_before_;

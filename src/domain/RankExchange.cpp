@@ -197,6 +197,30 @@ void RankExchange::post_send(int dest, int tag, Buffer data) {
   ++traffic_.messages;
 }
 
+namespace {
+// The largest tag every MPI allows. Ghost messages use cell indices as tags, but none is in
+// flight between graphs, so the two never meet.
+constexpr int kBetweenGraphsTag = 32767;
+}  // namespace
+
+void RankExchange::send(int dest, std::span<const char> data) {
+  check(MPI_Send(data.data(), as_count(data.size()), MPI_BYTE, dest, kBetweenGraphsTag, impl_->comm), "Send");
+  std::lock_guard lock(mutex_);
+  traffic_.bytes += data.size();
+  traffic_.point_to_point_bytes += data.size();
+  ++traffic_.messages;
+}
+
+std::span<const char> RankExchange::receive(int source) {
+  MPI_Status status;
+  check(MPI_Probe(source, kBetweenGraphsTag, impl_->comm, &status), "Probe");
+  int bytes = 0;
+  check(MPI_Get_count(&status, MPI_BYTE, &bytes), "Get_count");
+  received_.resize(static_cast<std::size_t>(bytes));
+  check(MPI_Recv(received_.data(), bytes, MPI_BYTE, source, kBetweenGraphsTag, impl_->comm, MPI_STATUS_IGNORE), "Recv");
+  return received_;
+}
+
 void RankExchange::finish() {
   for (auto& p : impl_->sends) check(MPI_Wait(&p.request, MPI_STATUS_IGNORE), "Wait(send)");
   impl_->sends.clear();
@@ -221,6 +245,8 @@ void RankExchange::test_recvs(std::span<const int>, std::vector<int>&) { no_mpi(
 const RankExchange::Buffer& RankExchange::wait_recv(int) { no_mpi(); }
 void RankExchange::post_send(int, int, Buffer) { no_mpi(); }
 void RankExchange::finish() { no_mpi(); }
+void RankExchange::send(int, std::span<const char>) { no_mpi(); }
+std::span<const char> RankExchange::receive(int) { no_mpi(); }
 #endif
 
 RankExchange::Traffic RankExchange::traffic() const {

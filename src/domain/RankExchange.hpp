@@ -61,6 +61,12 @@ class RankExchange {
   void post_send(int dest, int tag, Buffer data);
   void finish();                         // waits for every send, forgets every receive
 
+  // Between graphs (no point-to-point message in flight): one message to `dest`, returning
+  // once its buffer may be reused, and the next message from `source`, blocking until it is
+  // in (a view valid until the next receive). Messages from one sender arrive in the order sent.
+  void send(int dest, std::span<const char> data);
+  std::span<const char> receive(int source);
+
   // Counted since the last reset: point-to-point and collective payload, sent by this rank.
   struct Traffic {
     std::uint64_t bytes = 0, messages = 0;
@@ -79,6 +85,7 @@ class RankExchange {
   mutable std::vector<char> gathered_;  // reused by allgather, so large exchanges do not fault in fresh pages
   mutable std::vector<char> scattered_;  // reused by alltoall, likewise
   mutable std::vector<char> sending_;    // alltoall's contiguous send buffer, likewise
+  Buffer received_;                      // receive()'s, likewise
 };
 
 template <class T>

@@ -495,7 +495,6 @@ void Engine::drift_current(integration::ForceInputs force_inputs) {
 
 void Engine::drift_all() {
   drift_current(integration::ForceInputs::Drift);
-  gather_state();
 }
 
 std::size_t Engine::activate(Phase phase) {

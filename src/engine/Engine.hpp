@@ -68,7 +68,7 @@ class Engine {
   bool finished() const { return ti_current_ >= TimeLine::ticks; }
   // Advances to the next time a particle's step ends, or to ti_stop if earlier.
   StepInfo step(IntegerTime ti_stop = TimeLine::ticks);
-  // Drifts every particle to the current time (before a snapshot).
+  // Drifts every particle this rank keeps current to the current time (before a snapshot).
   void drift_all();
 
   // Drifts everything and recuts the cells now. Called before a restart file is written, so
@@ -182,11 +182,15 @@ class Engine {
     std::size_t bytes = 0;
   };
   MeshShare mesh_share() const;
-  // Brings every particle on every rank up to date with its owner's copy (collective: every
-  // rank calls it at the same point). drift_all() calls it; so must anything that reads the
-  // whole state between steps across ranks (restart files, statistics). Free when alone, and
-  // when nothing changed since the last call.
-  void gather_state();
+  // The particles in the run's order, handed to rank 0 in pieces: gas(store, first, count)
+  // for every gas particle in turn, then collisionless(...) likewise; the other ranks' calls
+  // hand nothing (every rank calls it at the same point). Where other ranks hold the current
+  // copies (halo mode), each leaf's owner sends its particles, at most
+  // output.gather_particles a message, so rank 0 holds at most one message of them beside
+  // its own; alone, or with every copy current, rank 0 passes its own arrays whole.
+  template <class Store>
+  using StatePiece = std::function<void(const Store&, std::size_t first, std::size_t count)>;
+  void stream_state(const StatePiece<GasParticles>& gas, const StatePiece<CollisionlessParticles>& collisionless);
   // The gas and collisionless particles (indices) of the leaves this rank owns, in the
   // run's order: what it writes of a restart set. Every particle when alone.
   std::pair<std::vector<std::size_t>, std::vector<std::size_t>> owned_particles() const;
@@ -241,6 +245,8 @@ class Engine {
   void exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
                               const char* what, bool every_leaf = false);
   void finish_exchanges();
+  template <class Store, class RangeOf>
+  void stream_store(Store& store, RangeOf range_of, const StatePiece<Store>& consume);
   void combine_wake_requests();  // the limiter's requests of every rank, combined on every rank
   // Calls fn(i) for each gas particle of the leaves drifted in this run of the graph: the
   // force loop asks to wake only neighbours of active particles, which are drifted.

@@ -221,14 +221,6 @@ void Engine::combine_wake_requests() {
   }
 }
 
-void Engine::gather_state() {
-  if (!layout_.halo_mode() || all_current_ || space_.leaves().empty()) return;
-  exchange_active_leaves(
-      false, sync_buffer_, [&](MessageWriter& w, int c) { pack_cell_state(w, space_, gas_, dm_, c, {}, {}); },
-      [&](MessageReader& r, int c) { unpack_cell_state(r, space_, gas_, dm_, c, {}, {}); }, "whole state", true);
-  all_current_ = true;
-}
-
 void Engine::finish_exchanges() {
   const auto t0 = std::chrono::steady_clock::now();
   ranks_->finish();

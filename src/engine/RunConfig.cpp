@@ -112,6 +112,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.output.dump_task_graph = p.flag("output.dump_task_graph");
   c.output.dump_timeline_every = p.integer("output.dump_timeline_every");
   c.output.statistics_every = p.integer("output.statistics_every");
+  c.output.gather_particles = static_cast<std::size_t>(p.integer("output.gather_particles"));
   c.output.fof_groups = p.flag("output.fof_groups");
   c.output.hop_groups = p.flag("output.hop_groups");
   c.restart.every_steps = p.integer("restart.every_steps");
