@@ -1,9 +1,11 @@
-// The leaves' neighbour and surroundings lists against a check of every pair of leaves.
+// The leaves' neighbour and surroundings lists against a check of every pair of leaves; top cells' octrees built apart.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "space/Space.hpp"
@@ -92,6 +94,101 @@ void expect_lists_match_every_pair(bool periodic) {
     listed += got.size();
   }
   EXPECT_GT(listed, space.leaves().size()) << "leaves have neighbours";
+}
+
+// A recut across ranks builds each top cell where its particles are: the subtree that one top
+// cell's particles give alone (positions copied out in their order before the recut, as a
+// rank receiving them would hold them) must be the whole recut's, cell for cell and in the
+// same particle order, for gas and dark matter.
+void expect_subtrees_built_apart_match(bool periodic) {
+  const double box = 2.0;
+  GasParticles gas;
+  fill(gas, 20000, box, periodic ? 5 : 6);
+  CollisionlessParticles dm;
+  dm.resize(7000);
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> N(0.0, 0.05 * box);
+  for (std::size_t i = 0; i < dm.size(); ++i)
+    for (int k = 0; k < 3; ++k) dm.x[i][k] = std::clamp(0.5 * box + N(rng), 0.0, std::nextafter(box, 0.0));
+  const std::vector<Vec3> gas_x = gas.x, dm_x = dm.x;  // before the recut, in their order
+  SpaceConfig config;
+  config.periodic = periodic;
+  config.box_size = {box, box, box};
+  config.split_size = 64;
+  Space space(config);
+  std::vector<std::size_t> gas_order;
+  space.recut(gas, dm, {}, &gas_order);
+  ASSERT_EQ(gas_order.size(), gas.size());
+  // Where each dark-matter particle went: positions are unique, so found by position.
+  std::vector<std::pair<Vec3, std::size_t>> dm_was(dm_x.size());
+  for (std::size_t i = 0; i < dm_x.size(); ++i) dm_was[i] = {dm_x[i], i};
+  auto before = [](const auto& a, const auto& b) {
+    return std::tie(a.first.x, a.first.y, a.first.z) < std::tie(b.first.x, b.first.y, b.first.z);
+  };
+  std::sort(dm_was.begin(), dm_was.end(), before);
+  auto dm_index_of = [&](const Vec3& x) {
+    const auto it = std::lower_bound(dm_was.begin(), dm_was.end(), std::pair{x, std::size_t{0}}, before);
+    return it->second;
+  };
+  const auto& grid = space.top_grid();
+  const int ntop = grid[0] * grid[1] * grid[2];
+  ASSERT_GT(ntop, 8);
+  int split_tops = 0;
+  for (int t = 0; t < ntop; ++t) {
+    const Cell& top = space.cell(t);
+    // The top cell's particles alone, in their order before the recut.
+    std::vector<std::size_t> was_gas(gas_order.begin() + static_cast<std::ptrdiff_t>(top.first),
+                                     gas_order.begin() + static_cast<std::ptrdiff_t>(top.first + top.count));
+    std::vector<std::size_t> was_dm;
+    for (std::size_t i = top.dm_first; i < top.dm_first + top.dm_count; ++i) was_dm.push_back(dm_index_of(dm.x[i]));
+    std::sort(was_gas.begin(), was_gas.end());
+    std::sort(was_dm.begin(), was_dm.end());
+    std::vector<Vec3> own_gas, own_dm;
+    for (std::size_t i : was_gas) own_gas.push_back(gas_x[i]);
+    for (std::size_t i : was_dm) own_dm.push_back(dm_x[i]);
+    std::vector<std::size_t> order(own_gas.size()), scratch(own_gas.size()), dm_order(own_dm.size()),
+        dm_scratch(own_dm.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    for (std::size_t k = 0; k < dm_order.size(); ++k) dm_order[k] = k;
+    const std::vector<Cell> sub = space.build_subtree(top, own_gas, order, scratch, own_dm, dm_order, dm_scratch);
+    // The same particles in the same places.
+    for (std::size_t k = 0; k < order.size(); ++k)
+      ASSERT_EQ(was_gas[order[k]], gas_order[top.first + k]) << "top cell " << t << ", gas place " << k;
+    for (std::size_t k = 0; k < dm_order.size(); ++k)
+      ASSERT_EQ(own_dm[dm_order[k]], dm.x[top.dm_first + k]) << "top cell " << t << ", dark matter place " << k;
+    // The same cells: walked together from the top cell.
+    std::vector<std::pair<int, int>> walk{{t, 0}};
+    std::size_t seen = 0;
+    while (!walk.empty()) {
+      const auto [c, k] = walk.back();
+      walk.pop_back();
+      ++seen;
+      const Cell& whole = space.cell(c);
+      const Cell& apart = sub[static_cast<std::size_t>(k)];
+      ASSERT_EQ(whole.leaf, apart.leaf) << "cell " << c;
+      EXPECT_EQ(whole.first, top.first + apart.first) << "cell " << c;
+      EXPECT_EQ(whole.count, apart.count) << "cell " << c;
+      EXPECT_EQ(whole.dm_first, top.dm_first + apart.dm_first) << "cell " << c;
+      EXPECT_EQ(whole.dm_count, apart.dm_count) << "cell " << c;
+      EXPECT_EQ(whole.depth, apart.depth) << "cell " << c;
+      EXPECT_EQ(whole.lo, apart.lo) << "cell " << c;
+      for (std::size_t o = 0; o < 8; ++o) {
+        ASSERT_EQ(whole.children[o] < 0, apart.children[o] < 0) << "cell " << c << ", octant " << o;
+        if (whole.children[o] >= 0) walk.emplace_back(whole.children[o], apart.children[o]);
+      }
+    }
+    EXPECT_EQ(seen, sub.size()) << "top cell " << t;
+    if (sub.size() > 1) ++split_tops;
+  }
+  EXPECT_GT(split_tops, 3) << "some top cells must be split for the test to mean anything";
+}
+
+TEST(SpaceSubtrees, TopCellsBuiltFromTheirOwnParticlesMatchTheWholeRecutPeriodic) {
+  expect_subtrees_built_apart_match(true);
+}
+
+TEST(SpaceSubtrees, TopCellsBuiltFromTheirOwnParticlesMatchTheWholeRecutOpen) {
+  expect_subtrees_built_apart_match(false);
 }
 
 TEST(SpaceNeighbours, ListsHoldEveryLeafWithinReachInAPeriodicBox) { expect_lists_match_every_pair(true); }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 
 #include "core/Error.hpp"
 #include "core/PeriodicWrap.hpp"
@@ -39,8 +40,8 @@ namespace {
 // Partitions order[first, first + count) by octant of `mid` (stable, so deterministic) and
 // returns where each octant starts, relative to `first`.
 std::array<std::size_t, 9> partition_octants(const std::vector<Vec3>& pos, std::size_t first, std::size_t count,
-                                             const Vec3& mid, std::vector<std::size_t>& order,
-                                             std::vector<std::size_t>& scratch) {
+                                             const Vec3& mid, std::span<std::size_t> order,
+                                             std::span<std::size_t> scratch) {
   std::array<std::size_t, 9> start{};
   auto octant = [&](std::size_t i) {
     const Vec3& x = pos[i];
@@ -67,7 +68,7 @@ Vec3 octant_corner(const Vec3& lo, const Vec3& half, int o) {
 // Orders the particles of a leaf as the octree below it would (without making cells), so that
 // any run of consecutive particles is spatially compact: the SPH loops work in small groups.
 void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t count, const Vec3& lo, const Vec3& width,
-                int depth, std::vector<std::size_t>& order, std::vector<std::size_t>& scratch) {
+                int depth, std::span<std::size_t> order, std::span<std::size_t> scratch) {
   if (count <= 4 || depth >= kMaxDepth) return;
   const Vec3 half = width * 0.5;
   const std::array<std::size_t, 9> start = partition_octants(pos, first, count, lo + half, order, scratch);
@@ -79,15 +80,13 @@ void order_leaf(const std::vector<Vec3>& pos, std::size_t first, std::size_t cou
 
 }  // namespace
 
-// Sorting state of one rebuild: the permutation being built for each species.
+// The state of one top cell's build: its particles' positions, and its slices of the
+// permutation being built for each species (indices into the positions).
 struct Space::SortState {
-  GasParticles& gas;
-  CollisionlessParticles& dm;
-  // The Space's own buffers, kept from one recut to the next.
-  std::vector<std::size_t>& order;
-  std::vector<std::size_t>& scratch;
-  std::vector<std::size_t>& dm_order;
-  std::vector<std::size_t>& dm_scratch;
+  const std::vector<Vec3>& gas_x;
+  const std::vector<Vec3>& dm_x;
+  std::span<std::size_t> order, scratch, dm_order, dm_scratch;
+  std::vector<Cell>& cells;  // the subtree; [0] is the top cell
 };
 
 void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each) {
@@ -177,9 +176,8 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
   };
   sort_scratch_.resize(n);
   dm_sort_scratch_.resize(n_dm);
-  SortState st{gas, dm, sort_order_, sort_scratch_, dm_sort_order_, dm_sort_scratch_};
-  const std::vector<std::size_t> start = sort_by_top(gas.x, st.order);
-  const std::vector<std::size_t> dm_start = sort_by_top(dm.x, st.dm_order);
+  const std::vector<std::size_t> start = sort_by_top(gas.x, sort_order_);
+  const std::vector<std::size_t> dm_start = sort_by_top(dm.x, dm_sort_order_);
 
   cells_.clear();
   top_.clear();
@@ -197,8 +195,38 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
         cells_.push_back(cell);
         top_.push_back(static_cast<int>(cells_.size()) - 1);
       }
-  // Positions are still in the original order: split reads them through the orders.
-  for (int t : top_) split(t, st);
+  // Each top cell's octree and particle order come from its own particles alone (positions
+  // are still in the original order: the builds read them through the orders), so top cells
+  // go in parallel; their cells are then numbered as one depth-first walk of the top cells in
+  // grid order would number them.
+  std::vector<std::vector<Cell>> subtrees(ntot);
+  auto slice = [](std::vector<std::size_t>& v, std::size_t first, std::size_t count) {
+    return std::span<std::size_t>(v).subspan(first, count);
+  };
+  for_each_or_serial(for_each, ntot, [&](std::size_t t) {
+    const Cell& top = cells_[t];
+    subtrees[t] = build_subtree(top, gas.x, slice(sort_order_, top.first, top.count),
+                                slice(sort_scratch_, top.first, top.count), dm.x,
+                                slice(dm_sort_order_, top.dm_first, top.dm_count),
+                                slice(dm_sort_scratch_, top.dm_first, top.dm_count));
+  });
+  for (std::size_t t = 0; t < ntot; ++t) {
+    const std::vector<Cell>& sub = subtrees[t];
+    const int base = static_cast<int>(cells_.size()) - 1;  // subtree cell k >= 1 becomes base + k
+    auto renumber = [&](int k) { return k <= 0 ? (k == 0 ? static_cast<int>(t) : -1) : base + k; };
+    Cell& top = cells_[t];  // (the pushes below move the cells: read it first)
+    top.leaf = sub[0].leaf;
+    for (int o = 0; o < 8; ++o) top.children[static_cast<std::size_t>(o)] = renumber(sub[0].children[static_cast<std::size_t>(o)]);
+    const std::size_t first = top.first, dm_first = top.dm_first;
+    for (std::size_t k = 1; k < sub.size(); ++k) {
+      Cell cell = sub[k];
+      cell.first += first;
+      cell.dm_first += dm_first;
+      cell.parent = renumber(cell.parent);
+      for (int& ch : cell.children) ch = renumber(ch);
+      cells_.push_back(cell);
+    }
+  }
   // The leaves that hold particles (only the cells are needed for that).
   leaves_.clear();
   leaf_slot_.assign(cells_.size(), -1);
@@ -208,15 +236,9 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
       leaf_slot_[static_cast<std::size_t>(c)] = static_cast<int>(leaves_.size());
       leaves_.push_back(c);
     }
-  // Each leaf's particles are ordered within its own range of the orders, so leaves go in parallel.
-  for_each_or_serial(for_each, leaves_.size(), [&](std::size_t l) {
-    const Cell& cell = cells_[static_cast<std::size_t>(leaves_[l])];
-    order_leaf(gas.x, cell.first, cell.count, cell.lo, cell.width, cell.depth, st.order, st.scratch);
-    order_leaf(dm.x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, st.dm_order, st.dm_scratch);
-  });
   // The derived fields stay: each step's drift tasks and ghosts work them out before any read.
-  gas.permute(st.order, for_each, &permute_scratch_, GasParticles::Derived::Stay);
-  dm.permute(st.dm_order, for_each, &permute_scratch_);
+  gas.permute(sort_order_, for_each, &permute_scratch_, GasParticles::Derived::Stay);
+  dm.permute(dm_sort_order_, for_each, &permute_scratch_);
   if (gas_order) gas_order->swap(sort_order_);
 
   // The leaves' h_max and cover radii; inner nodes take the largest cover below them.
@@ -298,8 +320,31 @@ void Space::find_neighbours(const ForEach& for_each, std::size_t first, std::siz
 }
 
 
-void Space::split(int c, SortState& s) {
-  const Cell cell = cells_[static_cast<std::size_t>(c)];
+std::vector<Cell> Space::build_subtree(const Cell& top, const std::vector<Vec3>& gas_x, std::span<std::size_t> gas_order,
+                                      std::span<std::size_t> gas_scratch, const std::vector<Vec3>& dm_x,
+                                      std::span<std::size_t> dm_order, std::span<std::size_t> dm_scratch) const {
+  std::vector<Cell> cells(1);
+  Cell& root = cells[0];
+  root.lo = top.lo;
+  root.width = top.width;
+  root.first = 0;
+  root.count = gas_order.size();
+  root.dm_first = 0;
+  root.dm_count = dm_order.size();
+  root.depth = top.depth;
+  SortState s{gas_x, dm_x, gas_order, gas_scratch, dm_order, dm_scratch, cells};
+  split(0, s);
+  // Each leaf's particles are ordered within its own range of the orders.
+  for (const Cell& cell : cells) {
+    if (!cell.leaf) continue;
+    order_leaf(gas_x, cell.first, cell.count, cell.lo, cell.width, cell.depth, gas_order, gas_scratch);
+    order_leaf(dm_x, cell.dm_first, cell.dm_count, cell.lo, cell.width, cell.depth, dm_order, dm_scratch);
+  }
+  return cells;
+}
+
+void Space::split(int c, SortState& s) const {
+  const Cell cell = s.cells[static_cast<std::size_t>(c)];
   const std::size_t limit = static_cast<std::size_t>(config_.split_size);
   bool must_split = cell.count > limit || cell.dm_count > limit;
   if (config_.periodic && cell.count + cell.dm_count > 1) {
@@ -308,10 +353,10 @@ void Space::split(int c, SortState& s) {
   }
   if (!must_split || cell.depth >= kMaxDepth) return;  // a leaf: its particles are ordered later
 
-  const std::array<std::size_t, 9> start = partition_octants(s.gas.x, cell.first, cell.count, cell.centre(), s.order, s.scratch);
+  const std::array<std::size_t, 9> start = partition_octants(s.gas_x, cell.first, cell.count, cell.centre(), s.order, s.scratch);
   const std::array<std::size_t, 9> dm_start =
-      partition_octants(s.dm.x, cell.dm_first, cell.dm_count, cell.centre(), s.dm_order, s.dm_scratch);
-  cells_[static_cast<std::size_t>(c)].leaf = false;
+      partition_octants(s.dm_x, cell.dm_first, cell.dm_count, cell.centre(), s.dm_order, s.dm_scratch);
+  s.cells[static_cast<std::size_t>(c)].leaf = false;
   for (int o = 0; o < 8; ++o) {
     const std::size_t cnt = start[o + 1] - start[o], dm_cnt = dm_start[o + 1] - dm_start[o];
     if (cnt + dm_cnt == 0) continue;
@@ -324,9 +369,9 @@ void Space::split(int c, SortState& s) {
     child.dm_count = dm_cnt;
     child.parent = c;
     child.depth = cell.depth + 1;
-    cells_.push_back(child);
-    const int id = static_cast<int>(cells_.size()) - 1;
-    cells_[static_cast<std::size_t>(c)].children[o] = id;
+    s.cells.push_back(child);
+    const int id = static_cast<int>(s.cells.size()) - 1;
+    s.cells[static_cast<std::size_t>(c)].children[o] = id;
     split(id, s);
   }
 }

@@ -41,6 +41,18 @@ class Space {
   void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {},
              std::vector<std::size_t>* gas_order = nullptr);
   void find_neighbours(const ForEach& for_each = {});
+  // The octree below one top-level cell and its particles' order, from its particles alone,
+  // as recut builds it: whoever holds a top cell's particles (in the order they had before)
+  // can build its part of the cells without the others'. `top`: the top cell's box and depth
+  // (as recut made it; its counts are the slices'). The slices gas_order and dm_order list the
+  // top cell's particles as indices into gas_x and dm_x, in their order before the recut; they
+  // come back in the recut's order (the scratch slices are as long). The cells come back
+  // numbered as recut numbers a subtree, [0] being the top cell, with parents and children
+  // indexing the vector and particle ranges counted from the top cell's first particle.
+  // Depends on the box (recut sets it), the split size and periodicity only.
+  std::vector<Cell> build_subtree(const Cell& top, const std::vector<Vec3>& gas_x, std::span<std::size_t> gas_order,
+                                  std::span<std::size_t> gas_scratch, const std::vector<Vec3>& dm_x,
+                                  std::span<std::size_t> dm_order, std::span<std::size_t> dm_scratch) const;
   // The lists of the leaves in slots [first, last) of leaves() only; the others are left
   // empty, for lists found elsewhere (another rank's share) to be set with set_lists.
   void find_neighbours(const ForEach& for_each, std::size_t first, std::size_t last);
@@ -93,7 +105,7 @@ class Space {
 
  private:
   struct SortState;
-  void split(int c, SortState& s);
+  void split(int c, SortState& s) const;
   void collect_leaves(int leaf, int node, std::vector<int>& neighbours, std::vector<int>& surroundings) const;
   // The top-level grid's indices along axis k whose cells may lie within `reach` of cell a's
   // box, ascending.
