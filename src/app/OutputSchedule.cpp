@@ -75,7 +75,7 @@ void SnapshotSeries::write() {
     const CollisionlessParticles& dm = engine_.dark_matter();
     writer = std::make_unique<io::SnapshotWriter>(
         path, info_,
-        io::SnapshotCounts{engine_.gas().size(), dm.count(Species::DarkMatter), dm.count(Species::LowResDarkMatter),
+        io::SnapshotCounts{engine_.gas_count(), dm.count(Species::DarkMatter), dm.count(Species::LowResDarkMatter),
                            dm.count(Species::Star)});
   }
   engine_.stream_state([&](const GasParticles& p, std::size_t first, std::size_t n) { writer->add_gas(p, first, n); },
@@ -101,7 +101,7 @@ void SnapshotSeries::write() {
       const std::string line = find_groups(fof);
       if (!quiet_) fmt::print(stderr, "{}\n", line);
     }
-    if (out.hop_groups && engine_.gas().size() + engine_.dark_matter().count(Species::Star) > 0) {
+    if (out.hop_groups && engine_.gas_count() + engine_.dark_matter().count(Species::Star) > 0) {
       HopRequest hop;
       hop.snapshot = path;
       hop.output = fmt::format("{}/hop_{:04d}.hdf5", out.directory, written_);

@@ -1,6 +1,7 @@
 // The layout of a run across MPI ranks: which rank owns each leaf, which ranks keep each leaf current, and where the cut along the leaves' Hilbert curve lies.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -38,6 +39,14 @@ class RankLayout {
   // anew from the work measured since it was made (located by leaf centres: `measured`, from
   // every rank), or from particle counts when nothing was measured yet. `steps`: the run's.
   void assign_owners(const Space& space, const std::vector<std::pair<Vec3, double>>& measured, long long steps);
+  // The same cut made per top-level cell, before the cells below them exist (halo mode's
+  // recut, where each top cell is built by its owner): `counts`, every top cell's particles
+  // on all ranks, is the work where nothing was measured. Returns the owner of each top cell;
+  // set_owners_from_tops then gives every cell its top cell's owner, once the cells stand.
+  std::vector<int> assign_top_owners(const Space& space, const std::vector<double>& counts,
+                                     const std::vector<std::pair<Vec3, double>>& measured, long long steps);
+  void set_owners_from_tops(const Space& space);
+  int top_owner(int t) const { return top_owner_[static_cast<std::size_t>(t)]; }
   // Halo mode, after assign_owners: the ranks that read each leaf (its neighbours' owners).
   void find_holders(const Space& space);
 
@@ -57,11 +66,18 @@ class RankLayout {
   }
 
  private:
+  // The owner of each unit (leaf or top cell, centred at `centres`) from the cut along the
+  // curve: kept while it shares the work well, else made anew.
+  std::vector<int> cut_along_curve(const Space& space, const std::vector<Vec3>& centres, const std::vector<double>& counts,
+                                   const std::vector<std::pair<Vec3, double>>& measured, long long steps,
+                                   const std::function<std::size_t(const Vec3&)>& unit_at);
+
   int rank_ = 0, ranks_ = 1;
   bool halo_mode_ = false;
   double imbalance_ = 0.1;
   long long min_steps_ = 100;
   std::vector<int> owner_;                  // per cell; empty when running alone
+  std::vector<int> top_owner_;              // per top-level cell, where owners are chosen per top cell
   std::vector<double> cost_;                // measured task time per cell since owners were chosen (ns)
   std::vector<std::uint64_t> cut_keys_;     // where ranks 1.. begin along the leaves' Hilbert curve
   std::vector<std::pair<Vec3, double>> work_since_cut_;  // (leaf centre, task ns) measured since the cut, before this interval

@@ -140,15 +140,14 @@ void pack_particle_range(MessageWriter& w, Store& store, std::size_t first, std:
 }
 
 template <class Store>
-void unpack_particle_range(MessageReader& r, Store& store, std::size_t count) {
-  store.resize(count);
-  for_each_field_in(store, message::whole_state, UnpackFields{r, 0, count});
+void unpack_particle_range(MessageReader& r, Store& store, std::size_t first, std::size_t count) {
+  for_each_field_in(store, message::whole_state, UnpackFields{r, first, count});
 }
 
 template void pack_particle_range(MessageWriter&, GasParticles&, std::size_t, std::size_t);
 template void pack_particle_range(MessageWriter&, CollisionlessParticles&, std::size_t, std::size_t);
-template void unpack_particle_range(MessageReader&, GasParticles&, std::size_t);
-template void unpack_particle_range(MessageReader&, CollisionlessParticles&, std::size_t);
+template void unpack_particle_range(MessageReader&, GasParticles&, std::size_t, std::size_t);
+template void unpack_particle_range(MessageReader&, CollisionlessParticles&, std::size_t, std::size_t);
 
 void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
   for_each_field_in(gas, message::migration, FieldPicks<MessageWriter>{w, indices});

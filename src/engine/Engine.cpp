@@ -82,10 +82,11 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
   ranks_ = domain::RankExchange::world();
   // Gravity reads every particle (the tree), and star formation's spawning and feedback read
-  // and change particles anywhere: those runs keep every rank's copy whole.
+  // and change particles anywhere: those runs keep every rank's copy whole, as do runs with
+  // collisionless particles (which without gravity only drift).
   if (ranks_)
     layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(),
-                                 !config_.gravity.enabled && !config_.star_formation.enabled,
+                                 !config_.gravity.enabled && !config_.star_formation.enabled && dm_.size() == 0,
                                  config_.repartition_imbalance, config_.repartition_min_steps);
   if (config_.star_formation.enabled) setup_star_formation();
   if (config_.comoving.enabled) setup_comoving();
@@ -309,54 +310,30 @@ void Engine::rebuild() {
   // Measured before the recut, while the cells it was measured in still stand.
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
   const ForEach for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); };
-  // In halo mode every rank recuts alike from the owners' positions; then each particle that
-  // a rank now holds but held no current copy of comes from the owner of the leaf it was in.
-  const bool migrate = layout_.halo_mode() && !all_current_ && !space_.leaves().empty();
-  std::vector<std::size_t>& order = recut_order_;
-  std::vector<int> old_leaf, old_owner;
-  std::vector<std::vector<int>> old_holders;
   const std::uint64_t bytes_before = ranks_ ? ranks_->traffic().bytes : 0;
-  if (migrate) {
-    share_recut_inputs();
-    old_leaf.assign(gas_.size(), -1);
-    for (int c : space_.leaves()) {
-      const Cell& cell = space_.cell(c);
-      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) old_leaf[i] = c;
-    }
-    old_owner = layout_.owners();
-    old_holders = layout_.take_holders();
+  // In halo mode each rank holds only some of the particles: the ranks recut together, each
+  // top cell built by its owner (EngineHaloRecut.cpp).
+  if (layout_.halo_mode()) {
+    recut_across_ranks(measured, for_each);
+  } else {
+    space_.recut(gas_, dm_, for_each);
   }
-  space_.recut(gas_, dm_, for_each, migrate ? &order : nullptr);
   if (comoving_) set_displacement_limits();
   ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
-  if (ranks_) layout_.assign_owners(space_, measured, steps_);
-  // A particle whose step ends now is due; one whose step began now (a rebuild between
-  // steps, as for a restart file) is not, though its bin is aligned with the time too.
-  auto step_end = [&](TimeBin bin, IntegerTime ti_begin) {
-    const bool due = TimeLine::active(bin, ti_current_) && (!initialised_ || ti_begin != ti_current_);
-    return due ? ti_current_ : TimeLine::step_end(bin, ti_current_);
-  };
-  // With shared recut inputs, only the particles this rank owned have current velocities and
-  // bins: each leaf's v_max and step end are taken over those here, and combined below.
-  auto current = [&](std::size_t i) {
-    return !migrate || old_owner[static_cast<std::size_t>(old_leaf[order[i]])] == layout_.rank();
-  };
-  for (int c : space_.leaves()) {
-    Cell& cell = space_.cell(c);
-    cell.ti_drift = ti_current_;
-    IntegerTime end = TimeLine::ticks;
-    if (migrate) cell.v_max = 0.0;
-    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
-      if (!current(i)) continue;
-      end = std::min(end, step_end(gas_.time_bin[i], gas_.ti_begin[i]));
-      if (migrate) cell.v_max = std::max(cell.v_max, norm(gas_.v_full[i]));
+  if (ranks_ && !layout_.halo_mode()) layout_.assign_owners(space_, measured, steps_);
+  if (!layout_.halo_mode()) {
+    for (int c : space_.leaves()) {
+      Cell& cell = space_.cell(c);
+      cell.ti_drift = ti_current_;
+      IntegerTime end = TimeLine::ticks;
+      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i)
+        end = std::min(end, due_end(gas_.time_bin[i], gas_.ti_begin[i]));
+      for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
+        end = std::min(end, due_end(dm_.time_bin[i], dm_.ti_begin[i]));
+      cell.ti_end_min = end;
     }
-    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
-      end = std::min(end, step_end(dm_.time_bin[i], dm_.ti_begin[i]));
-    cell.ti_end_min = end;
   }
-  if (migrate) combine_recut_records();
   ctx_->cover_exceeded = false;
   if (config_.gravity.enabled) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
@@ -380,11 +357,18 @@ void Engine::rebuild() {
   }
   if (layout_.halo_mode()) {
     layout_.find_holders(space_);
-    if (migrate) migrate_after_recut(order, old_leaf, old_owner, old_holders);
+    hold_leaves();
     recut_bytes_ += ranks_->traffic().bytes - bytes_before;
   }
   rebuild_pending_ = false;
   rebuild_s_ += seconds_since(t_rebuild);
+}
+
+IntegerTime Engine::due_end(TimeBin bin, IntegerTime ti_begin) const {
+  // A particle whose step ends now is due; one whose step began now (a rebuild between
+  // steps, as for a restart file) is not, though its bin is aligned with the time too.
+  const bool due = TimeLine::active(bin, ti_current_) && (!initialised_ || ti_begin != ti_current_);
+  return due ? ti_current_ : TimeLine::step_end(bin, ti_current_);
 }
 
 void Engine::remove_dissolved() {
@@ -483,11 +467,11 @@ void Engine::drift_current(integration::ForceInputs force_inputs) {
   const auto& leaves = space_.leaves();
   if (leaves.empty()) return;  // before the first rebuild: nothing has moved
   StepContext& ctx = *ctx_;
-  if (!layout_.halo_mode() || all_current_) {
+  if (!layout_.halo_mode()) {
     executor_.for_each(leaves.size(), [&](std::size_t l) { integration::drift(ctx, leaves[l], force_inputs); });
     return;
   }
-  std::vector<int> held;  // not only this rank's own leaves (`mine`): every leaf it keeps current
+  std::vector<int> held;  // not only this rank's own leaves (`mine`): every leaf it holds
   for (int c : leaves)
     if (layout_.keeps_current(static_cast<std::size_t>(c))) held.push_back(c);
   executor_.for_each(held.size(), [&](std::size_t l) { integration::drift(ctx, held[l], force_inputs); });
@@ -522,7 +506,7 @@ std::size_t Engine::activate(Phase phase) {
     dm_moved_.assign(dm_.size(), 0);
   }
   for (int c : leaves)
-    if (cell_active_[c]) {
+    if (cell_active_[c] && keeps_current(c)) {
       const Cell& cell = space_.cell(c);
       // In halo mode only the owner's count is sure (other copies may be stale).
       const bool count = !layout_.halo_mode() || mine(c);
@@ -718,7 +702,6 @@ void Engine::restore(IntegerTime ti_current, long long steps, IntegerTime ti_ste
   initialised_ = true;
   ctx_->mesh_step.bin = mesh_step.bin;
   ctx_->mesh_step.ti_begin = mesh_step.ti_begin;
-  all_current_ = true;  // every rank read the same file
   ti_current_ = ti_current;
   ti_step_begin_ = ti_step_begin;
   steps_ = steps;

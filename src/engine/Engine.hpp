@@ -148,8 +148,8 @@ class Engine {
   void set_next_particle_id(std::uint64_t id) { next_id_ = id; }
   void set_record_timeline(bool on) { record_timeline_ = on; }
 
-  // Across MPI ranks (docs/design.md, "MPI"): every rank stores every particle (current
-  // everywhere, or in halo mode only near its own cells), each runs the tasks of the cells it
+  // Across MPI ranks (docs/design.md, "MPI"): every rank stores every particle (or, in halo
+  // mode, only its own leaves and their neighbours), each runs the tasks of the cells it
   // owns, and the ranks exchange what those tasks change.
   int rank() const;
   int ranks() const;
@@ -170,11 +170,11 @@ class Engine {
   // Wall seconds in rebuilds (the drift before, the recut, the neighbour lists and graph,
   // across ranks the owners and what goes between ranks with them).
   double rebuild_seconds() const { return rebuild_s_; }
-  // Whether this run keeps on each rank only its own leaves and their neighbours current
-  // (MPI runs without gravity and star formation: docs/design.md, "Halo mode").
+  // Whether this run holds on each rank only its own leaves and their neighbours (MPI runs
+  // without gravity, star formation and collisionless particles: docs/design.md, "Halo mode").
   bool halo_mode() const { return layout_.halo_mode(); }
-  // In halo mode, the share of the leaves this rank kept current, averaged over the recuts
-  // (1 otherwise): below 1, it held stale copies of the rest.
+  // In halo mode, the share of the leaves this rank held, averaged over the recuts (1
+  // otherwise).
   double held_share() const { return layout_.held_share(); }
   // The periodic mesh's side and this rank's share of it: planes and bytes (0 without one).
   struct MeshShare {
@@ -184,16 +184,21 @@ class Engine {
   MeshShare mesh_share() const;
   // The particles in the run's order, handed to rank 0 in pieces: gas(store, first, count)
   // for every gas particle in turn, then collisionless(...) likewise; the other ranks' calls
-  // hand nothing (every rank calls it at the same point). Where other ranks hold the current
-  // copies (halo mode), each leaf's owner sends its particles, at most
+  // hand nothing (every rank calls it at the same point). Where rank 0 holds only some
+  // particles (halo mode), each leaf's owner sends its particles, at most
   // output.gather_particles a message, so rank 0 holds at most one message of them beside
-  // its own; alone, or with every copy current, rank 0 passes its own arrays whole.
+  // its own; alone, or with every particle here and current, rank 0 passes its arrays whole.
   template <class Store>
   using StatePiece = std::function<void(const Store&, std::size_t first, std::size_t count)>;
   void stream_state(const StatePiece<GasParticles>& gas, const StatePiece<CollisionlessParticles>& collisionless);
   // The gas and collisionless particles (indices) of the leaves this rank owns, in the
   // run's order: what it writes of a restart set. Every particle when alone.
   std::pair<std::vector<std::size_t>, std::vector<std::size_t>> owned_particles() const;
+  // Gas particles on all ranks (gas().size() when alone or while every rank holds all of them;
+  // in halo mode each rank holds only the leaves it keeps current).
+  std::size_t gas_count() const;
+  // The places in the run's order of this rank's gas particles `local` (indices into gas()).
+  std::vector<std::size_t> run_places(const std::vector<std::size_t>& local) const;
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
@@ -246,26 +251,31 @@ class Engine {
                               const char* what, bool every_leaf = false);
   void finish_exchanges();
   template <class Store, class RangeOf>
-  void stream_store(Store& store, RangeOf range_of, const StatePiece<Store>& consume);
+  void stream_store(Store& store, std::size_t total, RangeOf range_of, const StatePiece<Store>& consume);
   void combine_wake_requests();  // the limiter's requests of every rank, combined on every rank
-  // Calls fn(i) for each gas particle of the leaves drifted in this run of the graph: the
-  // force loop asks to wake only neighbours of active particles, which are drifted.
+  // Calls fn(i) for each gas particle of the leaves drifted in this run of the graph (that
+  // this rank holds): the force loop asks to wake only neighbours of active particles, which
+  // are drifted.
   template <class F>
   void for_each_drifted_gas(F&& fn) const {
     for (int c : space_.leaves()) {
-      if (!drifted_[static_cast<std::size_t>(c)]) continue;
+      if (!drifted_[static_cast<std::size_t>(c)] || !keeps_current(c)) continue;
       const Cell& cell = space_.cell(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) fn(i);
     }
   }
   void add_measured_costs();
-  // Halo mode.
-  void share_recut_inputs();
-  // After a recut with shared inputs: each leaf's v_max and ti_end_min, from the maxima and
-  // minima each rank found over the particles it owned before the recut.
-  void combine_recut_records();
-  void migrate_after_recut(const std::vector<std::size_t>& order, const std::vector<int>& old_leaf,
-                           const std::vector<int>& old_owner, const std::vector<std::vector<int>>& old_holders);
+  // Halo mode (EngineHaloRecut.cpp): the recut across ranks. Each rank sends the particles it
+  // owns to their new top cells' owners, which build those top cells' octrees and share the
+  // cells; this rank's arrays then hold the particles it owns, in the run's order.
+  void recut_across_ranks(const std::vector<std::pair<Vec3, double>>& measured, const ForEach& for_each);
+  // Then, once the holders are known, this rank's arrays: its own leaves' particles (which
+  // the recut left in them) and copies of the other leaves it reads, from their owners, all in
+  // the run's order.
+  void hold_leaves();
+  // Which step end a particle of bin `bin` whose step began at ti_begin is due at, seen from
+  // a recut at ti_current_.
+  IntegerTime due_end(TimeBin bin, IntegerTime ti_begin) const;
   void exchange_halo();
   // One all-to-all: `pack(q, w)` writes what goes to rank q, `unpack(r, reader)` reads what
   // rank r sent, which it must take whole (`what` names it if not).
@@ -328,9 +338,21 @@ class Engine {
   std::vector<char> sync_buffer_;           // this rank's cells, packed for the others
   std::vector<char> wake_buffer_;           // this rank's wake requests, packed for the others
   std::vector<char> lists_buffer_;          // this rank's share of the neighbour lists, packed for the others
-  std::vector<std::size_t> recut_order_;  // a migrating recut's permutation; its buffer is kept for the next
+  // Halo mode: where each cell's gas particles start in the run's order (cell.first is where
+  // they start in this rank's arrays, for the leaves it keeps current), and how many there are.
+  std::vector<std::size_t> run_first_;
+  std::size_t gas_total_ = 0;
+  std::vector<std::byte> permute_scratch_;  // halo mode's recut: one buffer, kept from one to the next
+  // What a halo-mode recut hands on to hold_leaves.
+  struct HaloRecut {
+    bool everyone = false;                    // every rank held every particle (the first recut)
+    std::vector<std::uint64_t> place;         // per particle here: its place in the run's order before the recut
+    std::vector<std::size_t> owned;           // this rank's particles (indices) in the recut's order
+    std::vector<std::uint64_t> old_first;     // the leaves before the recut: where each began in the run's order
+    std::vector<std::vector<int>> old_holders;  // and the ranks that held it
+  };
+  HaloRecut halo_recut_;
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded
-  bool all_current_ = true;                 // every particle here as its owner has it
   std::uint64_t recut_bytes_ = 0;           // sent by the recuts: their inputs, the migrations
   std::vector<char> drifted_;               // per cell: drifted in this run of the graph
   std::vector<double> wake_radiated_;       // per cell: energy radiated by the wake's undoing of kicks

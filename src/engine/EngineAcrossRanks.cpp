@@ -197,26 +197,35 @@ void Engine::sync_feedback_sites() {
 }
 
 void Engine::combine_wake_requests() {
-  // Each rank's requests (particle, bin) go to every rank and are combined by the minimum:
-  // a few per step, where a reduction over the whole array sent a byte per particle.
+  // Each rank's requests (leaf, place in it, bin) go to every rank and are combined by the
+  // minimum: a few per step, where a reduction over the whole array sent a byte per particle.
+  // (By leaf: in halo mode a particle's index differs between the ranks that hold it.)
   // Only the drifted leaves can hold requests, so only they are scanned, not every particle.
   wake_buffer_.clear();
   MessageWriter w(wake_buffer_);
-  for_each_drifted_gas([&](std::size_t i) {
-    if (gas_.wake_bin[i] == kNoBin) return;
-    w.put(static_cast<std::uint64_t>(i));
-    w.put(gas_.wake_bin[i]);
-  });
+  for (int c : space_.leaves()) {
+    if (!drifted_[static_cast<std::size_t>(c)] || !keeps_current(c)) continue;
+    const Cell& cell = space_.cell(c);
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+      if (gas_.wake_bin[i] == kNoBin) continue;
+      w.put(c);
+      w.put(static_cast<std::uint32_t>(i - cell.first));
+      w.put(gas_.wake_bin[i]);
+    }
+  }
   const auto all = ranks_->allgather(wake_buffer_);
   for (int r = 0; r < ranks_->size(); ++r) {
     if (r == layout_.rank()) continue;
     MessageReader in(all[static_cast<std::size_t>(r)]);
     while (!in.done()) {
-      const auto i = in.get<std::uint64_t>();
+      const int c = in.get<int>();
+      const auto k = in.get<std::uint32_t>();
       const auto bin = in.get<TimeBin>();
-      if (i >= gas_.wake_bin.size())
-        throw std::logic_error(fmt::format("rank {} asked to wake particle {} of {}", r, i, gas_.wake_bin.size()));
-      gas_.wake_bin[i] = std::min(gas_.wake_bin[i], bin);
+      if (c < 0 || static_cast<std::size_t>(c) >= space_.cells().size() || k >= space_.cell(c).count)
+        throw std::logic_error(fmt::format("rank {} asked to wake particle {} of cell {}", r, k, c));
+      if (!keeps_current(c)) continue;  // (in halo mode) a leaf this rank does not hold
+      TimeBin& mine_bin = gas_.wake_bin[space_.cell(c).first + k];
+      mine_bin = std::min(mine_bin, bin);
     }
   }
 }

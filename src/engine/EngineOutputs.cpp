@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <stdexcept>
+#include <tuple>
 
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
@@ -19,23 +20,29 @@ struct OwnedRun {
   std::size_t first, count;
 };
 
+// `range_of(c)`: {the cell's first particle in the run's order, its count, its first in this
+// rank's arrays}. A run's first is this rank's (meaningful where it owns the run).
 template <class RangeOf>
 std::vector<OwnedRun> owned_runs(const Space& space, const domain::RankLayout& layout, RangeOf range_of) {
   std::vector<std::pair<std::size_t, int>> by_first;
   for (int c : space.leaves()) {
-    const auto [first, count] = range_of(space.cell(c));
-    if (count > 0) by_first.emplace_back(first, c);
+    const auto [run_first, count, local_first] = range_of(c);
+    if (count > 0) by_first.emplace_back(run_first, c);
   }
   std::sort(by_first.begin(), by_first.end());
   std::vector<OwnedRun> runs;
-  for (const auto& [first, c] : by_first) {
-    const std::size_t count = range_of(space.cell(c)).second;
+  std::size_t run_end = 0;
+  for (const auto& [run_first, c] : by_first) {
+    const auto [unused, count, local_first] = range_of(c);
     const int owner = layout.owner(c);
-    if (!runs.empty() && runs.back().owner == owner && runs.back().first + runs.back().count == first) {
+    // Leaves next to each other in the run's order with one owner lie next to each other in
+    // its arrays too (its arrays hold leaves in the run's order).
+    if (!runs.empty() && runs.back().owner == owner && run_end == run_first) {
       runs.back().count += count;
     } else {
-      runs.push_back({owner, first, count});
+      runs.push_back({owner, local_first, count});
     }
+    run_end = run_first + count;
   }
   return runs;
 }
@@ -43,12 +50,11 @@ std::vector<OwnedRun> owned_runs(const Space& space, const domain::RankLayout& l
 }  // namespace
 
 template <class Store, class RangeOf>
-void Engine::stream_store(Store& store, RangeOf range_of, const StatePiece<Store>& consume) {
+void Engine::stream_store(Store& store, std::size_t total, RangeOf range_of, const StatePiece<Store>& consume) {
   const std::vector<OwnedRun> runs = owned_runs(space_, layout_, range_of);
   std::size_t covered = 0;
   for (const OwnedRun& run : runs) covered += run.count;
-  if (covered != store.size())
-    throw std::logic_error(fmt::format("the leaves hold {} of {} particles", covered, store.size()));
+  if (covered != total) throw std::logic_error(fmt::format("the leaves hold {} of {} particles", covered, total));
   const std::size_t chunk = std::max<std::size_t>(1, config_.output.gather_particles);
   // Both sides walk the same runs in the same order, and messages from one sender arrive in
   // the order sent: rank 0 knows from whom each piece comes and how many there are.
@@ -64,7 +70,8 @@ void Engine::stream_store(Store& store, RangeOf range_of, const StatePiece<Store
         const auto n = static_cast<std::size_t>(reader.get<std::uint64_t>());
         if (n == 0 || n > left)
           throw std::logic_error(fmt::format("rank {} sent {} particles of a run of {} still due", run.owner, n, left));
-        unpack_particle_range(reader, piece, n);
+        piece.resize(n);
+        unpack_particle_range(reader, piece, 0, n);
         if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more than {} particles", run.owner, n));
         consume(piece, 0, n);
         left -= n;
@@ -87,15 +94,18 @@ void Engine::stream_store(Store& store, RangeOf range_of, const StatePiece<Store
 }
 
 void Engine::stream_state(const StatePiece<GasParticles>& gas, const StatePiece<CollisionlessParticles>& collisionless) {
-  // Where every copy is current (alone, the replicated state), rank 0's own arrays are the state.
-  if (!ranks_ || !layout_.halo_mode() || all_current_ || space_.leaves().empty()) {
+  // Where rank 0 holds every particle, current (alone, the replicated state, halo mode before
+  // its first recut), its own arrays are the state.
+  if (!ranks_ || !layout_.halo_mode() || space_.leaves().empty()) {
     if (rank() != 0) return;
     gas(gas_, 0, gas_.size());
     collisionless(dm_, 0, dm_.size());
     return;
   }
-  stream_store(gas_, [](const Cell& c) { return std::pair{c.first, c.count}; }, gas);
-  stream_store(dm_, [](const Cell& c) { return std::pair{c.dm_first, c.dm_count}; }, collisionless);
+  // Halo mode holds no collisionless particles.
+  stream_store(gas_, gas_total_, [&](int c) {
+    return std::tuple{run_first_[static_cast<std::size_t>(c)], space_.cell(c).count, space_.cell(c).first};
+  }, gas);
 }
 
 }  // namespace fountain

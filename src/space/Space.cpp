@@ -96,32 +96,93 @@ void Space::rebuild(GasParticles& gas, CollisionlessParticles& dm, const ForEach
 
 void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each,
                   std::vector<std::size_t>* gas_order) {
-  ++rebuilds_;
   const std::size_t n = gas.size(), n_dm = dm.size();
-  // The box.
+  // The box: in a periodic one, every particle's image inside it.
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
   if (config_.periodic) {
-    lo_ = {};
-    size_ = config_.box_size;
-    auto wrap = [&](std::vector<Vec3>& xs) {
-      for (Vec3& p : xs) p = wrap_into_box(p, size_);
-    };
-    wrap(gas.x);
-    wrap(dm.x);
+    for (std::vector<Vec3>* xs : {&gas.x, &dm.x})
+      for (Vec3& p : *xs) p = wrap_into_box(p, config_.box_size);
   } else {
-    Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (const std::vector<Vec3>* xs : {&gas.x, &dm.x})
       for (const Vec3& p : *xs)
         for (int k = 0; k < 3; ++k) {
           lo[k] = std::min(lo[k], p[k]);
           hi[k] = std::max(hi[k], p[k]);
         }
-    if (n + n_dm == 0) lo = hi = {};
+  }
+  set_frame(lo, hi, n, n_dm);
+  const std::size_t ntot = cells_.size();
+
+  // Stable counting sort by top cell: returns where each top cell starts and fills `order`.
+  auto sort_by_top = [&](const std::vector<Vec3>& xs, std::vector<std::size_t>& order) {
+    std::vector<std::size_t>& key = sort_key_;
+    key.resize(xs.size());
+    for (std::size_t i = 0; i < xs.size(); ++i) key[i] = static_cast<std::size_t>(top_cell_at(xs[i]));
+    std::vector<std::size_t> start(ntot + 1, 0);
+    for (std::size_t k : key) ++start[k + 1];
+    for (std::size_t c = 0; c < ntot; ++c) start[c + 1] += start[c];
+    order.resize(xs.size());  // every place is filled below
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t i = 0; i < xs.size(); ++i) order[fill[key[i]]++] = i;
+    return start;
+  };
+  sort_scratch_.resize(n);
+  dm_sort_scratch_.resize(n_dm);
+  const std::vector<std::size_t> start = sort_by_top(gas.x, sort_order_);
+  const std::vector<std::size_t> dm_start = sort_by_top(dm.x, dm_sort_order_);
+  for (std::size_t t = 0; t < ntot; ++t) {
+    cells_[t].first = start[t];
+    cells_[t].count = start[t + 1] - start[t];
+    cells_[t].dm_first = dm_start[t];
+    cells_[t].dm_count = dm_start[t + 1] - dm_start[t];
+  }
+
+  // Each top cell's octree and particle order come from its own particles alone (positions
+  // are still in the original order: the builds read them through the orders), so top cells
+  // go in parallel.
+  std::vector<std::vector<Cell>> subtrees(ntot);
+  auto slice = [](std::vector<std::size_t>& v, std::size_t first, std::size_t count) {
+    return std::span<std::size_t>(v).subspan(first, count);
+  };
+  for_each_or_serial(for_each, ntot, [&](std::size_t t) {
+    const Cell& top = cells_[t];
+    subtrees[t] = build_subtree(top, gas.x, slice(sort_order_, top.first, top.count),
+                                slice(sort_scratch_, top.first, top.count), dm.x,
+                                slice(dm_sort_order_, top.dm_first, top.dm_count),
+                                slice(dm_sort_scratch_, top.dm_first, top.dm_count));
+  });
+  assemble(subtrees);
+  // The derived fields stay: each step's drift tasks and ghosts work them out before any read.
+  gas.permute(sort_order_, for_each, &permute_scratch_, GasParticles::Derived::Stay);
+  dm.permute(dm_sort_order_, for_each, &permute_scratch_);
+  if (gas_order) gas_order->swap(sort_order_);
+
+  // The leaves' h_max and speeds, from their particles.
+  for (int c : leaves_) {
+    Cell& cell = cells_[static_cast<std::size_t>(c)];
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+      cell.h_max = std::max(cell.h_max, gas.h[i]);
+      cell.v_max = std::max(cell.v_max, norm(gas.v_full[i]));
+    }
+  }
+  set_covers();
+}
+
+void Space::set_frame(const Vec3& lo, const Vec3& hi, std::size_t n, std::size_t n_dm) {
+  ++rebuilds_;
+  if (config_.periodic) {
+    lo_ = {};
+    size_ = config_.box_size;
+  } else {
+    // The particles' bounding box, a little wider (and never flat).
+    Vec3 a = lo, b = hi;
+    if (n + n_dm == 0) a = b = {};
     double ext = 0.0;
-    for (int k = 0; k < 3; ++k) ext = std::max(ext, hi[k] - lo[k]);
+    for (int k = 0; k < 3; ++k) ext = std::max(ext, b[k] - a[k]);
     if (ext == 0.0) ext = 1.0;
     for (int k = 0; k < 3; ++k) {
-      const double e = std::max(hi[k] - lo[k], 1e-3 * ext) * (1.0 + 1e-6) + 1e-12 * ext;
-      lo_[k] = lo[k] - 0.5 * (e - (hi[k] - lo[k]));
+      const double e = std::max(b[k] - a[k], 1e-3 * ext) * (1.0 + 1e-6) + 1e-12 * ext;
+      lo_[k] = a[k] - 0.5 * (e - (b[k] - a[k]));
       size_[k] = e;
     }
   }
@@ -155,67 +216,34 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
                                  "at most one cell per particle is allowed; lower it, or set 0 to choose from the "
                                  "particle number",
                                  config_.top_cells_origin, config_.top_cells, ntop[0], ntop[1], ntop[2], ntot, n + n_dm));
-
-  auto top_cell = [&](const Vec3& x) {
-    std::array<int, 3> ix;
-    for (int k = 0; k < 3; ++k) ix[k] = std::clamp(static_cast<int>(std::floor((x[k] - lo_[k]) / wtop[k])), 0, ntop[k] - 1);
-    return (static_cast<std::size_t>(ix[0]) * ntop[1] + ix[1]) * ntop[2] + ix[2];
-  };
-  // Stable counting sort by top cell: returns where each top cell starts and fills `order`.
-  auto sort_by_top = [&](const std::vector<Vec3>& xs, std::vector<std::size_t>& order) {
-    std::vector<std::size_t>& key = sort_key_;
-    key.resize(xs.size());
-    for (std::size_t i = 0; i < xs.size(); ++i) key[i] = top_cell(xs[i]);
-    std::vector<std::size_t> start(ntot + 1, 0);
-    for (std::size_t k : key) ++start[k + 1];
-    for (std::size_t c = 0; c < ntot; ++c) start[c + 1] += start[c];
-    order.resize(xs.size());  // every place is filled below
-    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < xs.size(); ++i) order[fill[key[i]]++] = i;
-    return start;
-  };
-  sort_scratch_.resize(n);
-  dm_sort_scratch_.resize(n_dm);
-  const std::vector<std::size_t> start = sort_by_top(gas.x, sort_order_);
-  const std::vector<std::size_t> dm_start = sort_by_top(dm.x, dm_sort_order_);
-
   cells_.clear();
   top_.clear();
+  leaves_.clear();
   for (int a = 0; a < ntop[0]; ++a)
     for (int b = 0; b < ntop[1]; ++b)
       for (int c = 0; c < ntop[2]; ++c) {
-        const std::size_t t = (static_cast<std::size_t>(a) * ntop[1] + b) * ntop[2] + c;
         Cell cell;
         cell.lo = lo_ + Vec3{a * wtop.x, b * wtop.y, c * wtop.z};
         cell.width = wtop;
-        cell.first = start[t];
-        cell.count = start[t + 1] - start[t];
-        cell.dm_first = dm_start[t];
-        cell.dm_count = dm_start[t + 1] - dm_start[t];
         cells_.push_back(cell);
         top_.push_back(static_cast<int>(cells_.size()) - 1);
       }
-  // Each top cell's octree and particle order come from its own particles alone (positions
-  // are still in the original order: the builds read them through the orders), so top cells
-  // go in parallel; their cells are then numbered as one depth-first walk of the top cells in
-  // grid order would number them.
-  std::vector<std::vector<Cell>> subtrees(ntot);
-  auto slice = [](std::vector<std::size_t>& v, std::size_t first, std::size_t count) {
-    return std::span<std::size_t>(v).subspan(first, count);
-  };
-  for_each_or_serial(for_each, ntot, [&](std::size_t t) {
-    const Cell& top = cells_[t];
-    subtrees[t] = build_subtree(top, gas.x, slice(sort_order_, top.first, top.count),
-                                slice(sort_scratch_, top.first, top.count), dm.x,
-                                slice(dm_sort_order_, top.dm_first, top.dm_count),
-                                slice(dm_sort_scratch_, top.dm_first, top.dm_count));
-  });
+  half_ = size_ * 0.5;
+}
+
+void Space::assemble(const std::vector<std::vector<Cell>>& subtrees) {
+  // The cells are numbered as one depth-first walk of the top cells in grid order would number
+  // them; particle ranges count from each top cell's first particle.
+  const std::size_t ntot = top_.size();
   for (std::size_t t = 0; t < ntot; ++t) {
     const std::vector<Cell>& sub = subtrees[t];
     const int base = static_cast<int>(cells_.size()) - 1;  // subtree cell k >= 1 becomes base + k
     auto renumber = [&](int k) { return k <= 0 ? (k == 0 ? static_cast<int>(t) : -1) : base + k; };
     Cell& top = cells_[t];  // (the pushes below move the cells: read it first)
     top.leaf = sub[0].leaf;
+    top.h_max = sub[0].h_max;
+    top.v_max = sub[0].v_max;
+    top.ti_end_min = sub[0].ti_end_min;
     for (int o = 0; o < 8; ++o) top.children[static_cast<std::size_t>(o)] = renumber(sub[0].children[static_cast<std::size_t>(o)]);
     const std::size_t first = top.first, dm_first = top.dm_first;
     for (std::size_t k = 1; k < sub.size(); ++k) {
@@ -236,23 +264,15 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
       leaf_slot_[static_cast<std::size_t>(c)] = static_cast<int>(leaves_.size());
       leaves_.push_back(c);
     }
-  // The derived fields stay: each step's drift tasks and ghosts work them out before any read.
-  gas.permute(sort_order_, for_each, &permute_scratch_, GasParticles::Derived::Stay);
-  dm.permute(dm_sort_order_, for_each, &permute_scratch_);
-  if (gas_order) gas_order->swap(sort_order_);
+}
 
-  // The leaves' h_max and cover radii; inner nodes take the largest cover below them.
+void Space::set_covers() {
+  // The leaves' cover radii from their h_max; inner nodes take the largest cover below them.
   for (int c = static_cast<int>(cells_.size()) - 1; c >= 0; --c) {
     Cell& cell = cells_[static_cast<std::size_t>(c)];
     cell.dx_max = 0.0;
     cell.dx_around = 0.0;
     if (cell.leaf) {
-      cell.h_max = 0.0;
-      cell.v_max = 0.0;
-      for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
-        cell.h_max = std::max(cell.h_max, gas.h[i]);
-        cell.v_max = std::max(cell.v_max, norm(gas.v_full[i]));
-      }
       cell.r_cover = (1.0 + config_.skin) * cell.h_max;
     } else {
       cell.r_cover = 0.0;
@@ -264,8 +284,6 @@ void Space::recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& 
         }
     }
   }
-
-  half_ = size_ * 0.5;
   if (config_.periodic) {
     // One image of each neighbour, the one nearest the cell, must suffice: the reach from
     // a cell's centre stays below half the box.

@@ -41,6 +41,22 @@ class Space {
   void recut(GasParticles& gas, CollisionlessParticles& dm, const ForEach& for_each = {},
              std::vector<std::size_t>* gas_order = nullptr);
   void find_neighbours(const ForEach& for_each = {});
+
+  // The recut in parts, for ranks that each hold some of the particles (recut is set_frame,
+  // a sort by top cell, build_subtree for each top cell, assemble, the leaves' h_max and
+  // v_max from their particles, set_covers):
+  // The box (periodic: the configured one; open: the particles' bounding box lo..hi, as
+  // recut widens it) and the top-level grid for n gas and n_dm collisionless particles; the
+  // top cells made, empty. A caller fills in their first, count, dm_first and dm_count.
+  void set_frame(const Vec3& lo, const Vec3& hi, std::size_t n, std::size_t n_dm);
+  // The cells below the top cells from each top cell's subtree (build_subtree's, with its
+  // leaves' h_max, v_max and ti_end_min where known), numbered as recut numbers them, and
+  // the list of leaves.
+  void assemble(const std::vector<std::vector<Cell>>& subtrees);
+  // The cover radii from the leaves' h_max, inner nodes' h_max and covers from below, the
+  // motion bounds reset; throws InputError when a periodic box is too small for them.
+  void set_covers();
+
   // The octree below one top-level cell and its particles' order, from its particles alone,
   // as recut builds it: whoever holds a top cell's particles (in the order they had before)
   // can build its part of the cells without the others'. `top`: the top cell's box and depth

@@ -1,0 +1,357 @@
+// Halo mode's recut across ranks: each rank holds only the leaves it keeps current, and each top cell is built by its owner (docs/design.md, "Halo mode").
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include "core/PeriodicWrap.hpp"
+#include "domain/RankExchange.hpp"
+#include "engine/CellMessages.hpp"
+#include "engine/Engine.hpp"
+
+namespace fountain {
+
+namespace {
+
+// Where a cell's particles start in the arrays of a rank that does not hold it: far past any
+// array, so that a read of them fails at once rather than reading another leaf's.
+constexpr std::size_t kNotHeld = std::numeric_limits<std::size_t>::max() / 4;
+
+}  // namespace
+
+void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& measured, const ForEach& for_each) {
+  const int me = layout_.rank();
+  const auto nranks = static_cast<std::size_t>(ranks_->size());
+  HaloRecut& r = halo_recut_;
+  // Every particle this rank holds (all current) with its place in the run's order, and which
+  // it owns. At the first recut every rank holds every particle, as read, and takes all as
+  // its own: all then find the same box, counts and owners without a word, and none need be
+  // sent. Until this rank's arrays are made anew (hold_leaves) they keep every copy: the
+  // holders of a new leaf then need only be told which particles it holds.
+  r.everyone = space_.leaves().empty();
+  std::vector<std::size_t> own;
+  r.place.assign(gas_.size(), 0);
+  r.old_first.clear();
+  r.old_holders.clear();
+  if (r.everyone) {
+    own.resize(gas_.size());
+    std::iota(own.begin(), own.end(), std::size_t{0});
+    std::iota(r.place.begin(), r.place.end(), std::uint64_t{0});
+  } else {
+    std::vector<int> leaves = space_.leaves();
+    std::sort(leaves.begin(), leaves.end(), [&](int a, int b) {
+      return run_first_[static_cast<std::size_t>(a)] < run_first_[static_cast<std::size_t>(b)];
+    });
+    for (int c : leaves) {
+      r.old_first.push_back(run_first_[static_cast<std::size_t>(c)]);
+      r.old_holders.push_back(layout_.holders()[static_cast<std::size_t>(c)]);
+      if (!keeps_current(c)) continue;
+      const Cell& cell = space_.cell(c);
+      for (std::size_t k = 0; k < cell.count; ++k) {
+        r.place[cell.first + k] = run_first_[static_cast<std::size_t>(c)] + k;
+        if (mine(c)) own.push_back(cell.first + k);
+      }
+    }
+  }
+
+  // The box (a periodic one's images inside it, for every copy alike; an open one's bounds over
+  // every rank's particles, exact in any order) and the top-level grid.
+  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  if (space_.periodic()) {
+    for (Vec3& x : gas_.x) x = wrap_into_box(x, space_.config().box_size);
+  } else {
+    for (std::size_t i : own)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::min(lo[k], gas_.x[i][k]);
+        hi[k] = std::max(hi[k], gas_.x[i][k]);
+      }
+    if (!r.everyone) {
+      const std::array<double, 6> bounds{lo.x, lo.y, lo.z, -hi.x, -hi.y, -hi.z};
+      const auto all = ranks_->allgather_values(std::span<const double>(bounds), "box bounds");
+      for (const auto& b : all)
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], b[static_cast<std::size_t>(k)]);
+          hi[k] = std::max(hi[k], -b[static_cast<std::size_t>(k + 3)]);
+        }
+    }
+  }
+  gas_total_ = r.everyone ? own.size() : static_cast<std::size_t>(ranks_->sum(static_cast<long long>(own.size())));
+  space_.set_frame(lo, hi, gas_total_, 0);
+  const std::size_t ntop = space_.cells().size();
+
+  // Each particle's top cell, the particles per top cell on every rank, and the top cells' owners.
+  std::vector<int> top(own.size());
+  std::vector<double> here(ntop, 0.0);
+  for (std::size_t k = 0; k < own.size(); ++k) {
+    top[k] = space_.top_cell_at(gas_.x[own[k]]);
+    here[static_cast<std::size_t>(top[k])] += 1.0;
+  }
+  std::vector<double> counts = here;
+  if (!r.everyone) {
+    counts.assign(ntop, 0.0);
+    for (const auto& theirs : ranks_->allgather_values(std::span<const double>(here), "particles per top cell"))
+      for (std::size_t t = 0; t < ntop; ++t) counts[t] += theirs[t];
+  }
+  const std::vector<int> top_owner = layout_.assign_top_owners(space_, counts, measured, steps_);
+  std::size_t start = 0;
+  for (std::size_t t = 0; t < ntop; ++t) {
+    Cell& cell = space_.cell(static_cast<int>(t));
+    cell.first = start;
+    cell.count = static_cast<std::size_t>(counts[t]);
+    start += cell.count;
+  }
+
+  // Each particle goes to its top cell's owner, with its place and top cell (at the first
+  // recut each rank keeps its top cells' and leaves the rest).
+  struct Entry {
+    int top;
+    std::uint64_t place;
+    std::size_t at;  // in gas_
+  };
+  std::vector<Entry> entries;
+  std::vector<std::vector<std::size_t>> to(nranks);
+  for (std::size_t k = 0; k < own.size(); ++k) {
+    const auto q = static_cast<std::size_t>(top_owner[static_cast<std::size_t>(top[k])]);
+    if (q == static_cast<std::size_t>(me)) {
+      entries.push_back({top[k], r.place[own[k]], own[k]});
+    } else if (!r.everyone) {
+      to[q].push_back(own[k]);
+    }
+  }
+  to_rank_.resize(nranks);
+  for (std::size_t q = 0; q < nranks; ++q) {
+    auto& b = to_rank_[q];
+    b.clear();
+    if (static_cast<int>(q) == me) continue;
+    MessageWriter w(b);
+    w.put(static_cast<std::uint64_t>(to[q].size()));
+    for (std::size_t i : to[q]) {
+      w.put(r.place[i]);
+      w.put(space_.top_cell_at(gas_.x[i]));
+    }
+    pack_gas_particles(w, gas_, to[q]);
+  }
+  const auto in = ranks_->alltoall(to_rank_);
+  // The arrivals join this rank's arrays after what it holds.
+  std::vector<std::size_t> picked;
+  for (std::size_t q = 0; q < nranks; ++q) {
+    if (static_cast<int>(q) == me) continue;
+    MessageReader reader(in[q]);
+    const auto n = static_cast<std::size_t>(reader.get<std::uint64_t>());
+    const std::size_t at = gas_.size();
+    for (std::size_t j = 0; j < n; ++j) {
+      const auto p = reader.get<std::uint64_t>();
+      entries.push_back({reader.get<int>(), p, at + j});
+      r.place.push_back(p);
+    }
+    gas_.resize(at + n);
+    picked.resize(n);
+    std::iota(picked.begin(), picked.end(), at);
+    unpack_gas_particles(reader, gas_, picked);
+    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more particles than it announced", q));
+  }
+  // This rank's top cells' particles ordered by top cell and, within one, by place: the order
+  // they had, in which one rank's recut takes them.
+  std::sort(entries.begin(), entries.end(),
+            [](const Entry& a, const Entry& b) { return a.top != b.top ? a.top < b.top : a.place < b.place; });
+  std::vector<std::size_t>& order = r.owned;
+  order.resize(entries.size());
+  std::vector<std::size_t> scratch(entries.size());
+  for (std::size_t j = 0; j < entries.size(); ++j) order[j] = entries[j].at;
+
+  // The octrees of this rank's top cells, each from its own particles (in `order`, which
+  // comes back in the recut's order), and each leaf's record (h_max, v_max, step end).
+  std::vector<int> mine_tops;
+  for (std::size_t t = 0; t < ntop; ++t)
+    if (top_owner[t] == me) mine_tops.push_back(static_cast<int>(t));
+  std::vector<std::size_t> begin(ntop, 0);  // where each of this rank's top cells starts in `order`
+  {
+    std::size_t j = 0;
+    for (int t : mine_tops) {
+      begin[static_cast<std::size_t>(t)] = j;
+      while (j < entries.size() && entries[j].top == t) ++j;
+      if (j - begin[static_cast<std::size_t>(t)] != space_.cell(t).count)
+        throw std::logic_error(fmt::format("top cell {}: {} particles arrived of {}", t, j - begin[static_cast<std::size_t>(t)],
+                                           space_.cell(t).count));
+    }
+    if (j != entries.size()) throw std::logic_error("particles arrived for a top cell this rank does not own");
+  }
+  std::vector<std::vector<Cell>> subtrees(ntop);
+  const std::vector<Vec3> no_positions;
+  for_each(mine_tops.size(), [&](std::size_t m) {
+    const int t = mine_tops[m];
+    const Cell& cell = space_.cell(t);
+    const std::size_t b = begin[static_cast<std::size_t>(t)];
+    subtrees[static_cast<std::size_t>(t)] =
+        space_.build_subtree(cell, gas_.x, std::span<std::size_t>(order).subspan(b, cell.count),
+                             std::span<std::size_t>(scratch).subspan(b, cell.count), no_positions, {}, {});
+  });
+  for (int t : mine_tops) {
+    const std::size_t b = begin[static_cast<std::size_t>(t)];
+    for (Cell& cell : subtrees[static_cast<std::size_t>(t)]) {
+      if (!cell.leaf) continue;
+      IntegerTime end = TimeLine::ticks;
+      for (std::size_t j = b + cell.first; j < b + cell.first + cell.count; ++j) {
+        const std::size_t i = order[j];
+        cell.h_max = std::max(cell.h_max, gas_.h[i]);
+        cell.v_max = std::max(cell.v_max, norm(gas_.v_full[i]));
+        end = std::min(end, due_end(gas_.time_bin[i], gas_.ti_begin[i]));
+      }
+      cell.ti_end_min = end;
+      cell.ti_drift = ti_current_;
+    }
+  }
+
+  // Every rank's subtrees to every rank: all make the same cells.
+  std::vector<char> buffer;
+  MessageWriter w(buffer);
+  for (int t : mine_tops) {
+    const auto& sub = subtrees[static_cast<std::size_t>(t)];
+    w.put(t);
+    w.put(static_cast<std::uint64_t>(sub.size()));
+    w.put(sub.data(), sub.size());
+  }
+  const auto all = ranks_->allgather(buffer);
+  for (std::size_t q = 0; q < nranks; ++q) {
+    if (static_cast<int>(q) == me) continue;
+    MessageReader reader(all[q]);
+    while (!reader.done()) {
+      const int t = reader.get<int>();
+      auto& sub = subtrees[static_cast<std::size_t>(t)];
+      sub.resize(static_cast<std::size_t>(reader.get<std::uint64_t>()));
+      reader.get(sub.data(), sub.size());
+    }
+  }
+  for (std::size_t t = 0; t < ntop; ++t)
+    if (subtrees[t].empty()) throw std::logic_error(fmt::format("no rank built top cell {}", t));
+  space_.assemble(subtrees);
+  space_.set_covers();
+  for (int c : space_.leaves()) space_.cell(c).ti_drift = ti_current_;
+  run_first_.resize(space_.cells().size());
+  for (std::size_t c = 0; c < run_first_.size(); ++c) run_first_[c] = space_.cell(static_cast<int>(c)).first;
+  layout_.set_owners_from_tops(space_);
+}
+
+void Engine::hold_leaves() {
+  const HaloRecut& r = halo_recut_;
+  // The leaves in the run's order; where each of this rank's own leaves starts in r.owned.
+  std::vector<int> leaves = space_.leaves();
+  std::sort(leaves.begin(), leaves.end(), [&](int a, int b) {
+    return run_first_[static_cast<std::size_t>(a)] < run_first_[static_cast<std::size_t>(b)];
+  });
+  std::vector<std::size_t> in_owned(space_.cells().size(), kNotHeld);
+  std::size_t n_owned = 0;
+  for (int c : leaves)
+    if (mine(c)) {
+      in_owned[static_cast<std::size_t>(c)] = n_owned;
+      n_owned += space_.cell(c).count;
+    }
+  if (n_owned != r.owned.size())
+    throw std::logic_error(fmt::format("{} particles owned, {} in the leaves", r.owned.size(), n_owned));
+  // This rank's arrays are to hold the leaves it keeps current, in the run's order.
+  std::vector<std::size_t> local_first(space_.cells().size(), kNotHeld);
+  std::size_t held = 0;
+  for (int c : leaves)
+    if (keeps_current(c)) {
+      local_first[static_cast<std::size_t>(c)] = held;
+      held += space_.cell(c).count;
+    }
+  std::vector<std::size_t> order(held, kNotHeld);  // for each new place here: the particle now in gas_
+  for (int c : leaves)
+    if (mine(c))
+      std::copy_n(r.owned.begin() + static_cast<std::ptrdiff_t>(in_owned[static_cast<std::size_t>(c)]), space_.cell(c).count,
+                  order.begin() + static_cast<std::ptrdiff_t>(local_first[static_cast<std::size_t>(c)]));
+  // Whether rank q held a current copy of the particle at `place` before the recut: it held
+  // that place's leaf (every rank held every particle before the first recut).
+  auto had_copy = [&](int q, std::uint64_t place) {
+    if (r.everyone) return true;
+    const auto l = static_cast<std::size_t>(std::upper_bound(r.old_first.begin(), r.old_first.end(), place) - r.old_first.begin()) - 1;
+    const auto& h = r.old_holders[l];
+    return std::binary_search(h.begin(), h.end(), q);
+  };
+  // Where each particle this rank has (held before, or arrived in the recut) now lies, by
+  // place (at the first recut its place is its index).
+  std::vector<std::pair<std::uint64_t, std::size_t>> by_place;
+  if (!r.everyone) {
+    by_place.resize(r.place.size());
+    for (std::size_t i = 0; i < r.place.size(); ++i) by_place[i] = {r.place[i], i};
+    std::sort(by_place.begin(), by_place.end());
+  }
+  // Each owner tells the holders of its leaves which particles they hold, by place, and sends
+  // whole only those a holder had no current copy of.
+  std::vector<std::size_t> whole;
+  exchange_with_ranks(
+      [&](int q, MessageWriter& w) {
+        whole.clear();
+        for (int c : leaves) {
+          if (!mine(c) || !layout_.holds(q, c)) continue;
+          const std::size_t from = in_owned[static_cast<std::size_t>(c)];
+          for (std::size_t k = 0; k < space_.cell(c).count; ++k) {
+            const std::size_t i = r.owned[from + k];
+            const bool copy = had_copy(q, r.place[i]);
+            w.put(r.place[i]);
+            w.put(static_cast<std::uint8_t>(copy));
+            if (!copy) whole.push_back(i);
+          }
+        }
+        pack_gas_particles(w, gas_, whole);
+      },
+      [&](int q, MessageReader& reader) {
+        std::vector<std::size_t> slots;  // new places of the particles sent whole
+        for (int c : leaves) {
+          if (layout_.owner(c) != q || !keeps_current(c)) continue;
+          const std::size_t first = local_first[static_cast<std::size_t>(c)];
+          for (std::size_t k = 0; k < space_.cell(c).count; ++k) {
+            const auto p = reader.get<std::uint64_t>();
+            const bool copy = reader.get<std::uint8_t>() != 0;
+            if (copy && r.everyone) {
+              order[first + k] = static_cast<std::size_t>(p);
+            } else if (copy) {
+              const auto it = std::lower_bound(by_place.begin(), by_place.end(), std::pair{p, std::size_t{0}});
+              if (it == by_place.end() || it->first != p)
+                throw std::logic_error(fmt::format("rank {} took rank {} to hold particle {}", q, layout_.rank(), p));
+              order[first + k] = it->second;
+            } else {
+              slots.push_back(first + k);
+            }
+          }
+        }
+        const std::size_t at = gas_.size();
+        gas_.resize(at + slots.size());
+        std::vector<std::size_t> into(slots.size());
+        std::iota(into.begin(), into.end(), at);
+        unpack_gas_particles(reader, gas_, into);
+        for (std::size_t j = 0; j < slots.size(); ++j) order[slots[j]] = at + j;
+      },
+      "the leaves' holders");
+  // The arrays: what this rank holds, in the run's order (in place, through one buffer).
+  gas_.permute(order, {}, &permute_scratch_);
+  // After the first, the arrays hold a share of the particles read: the room for all goes.
+  if (r.everyone) gas_.for_each_field([](auto& field) { field.shrink_to_fit(); });
+  for (std::size_t c = 0; c < local_first.size(); ++c) space_.cell(static_cast<int>(c)).first = local_first[c];
+  halo_recut_ = {};
+}
+
+std::size_t Engine::gas_count() const { return layout_.halo_mode() && !space_.leaves().empty() ? gas_total_ : gas_.size(); }
+
+std::vector<std::size_t> Engine::run_places(const std::vector<std::size_t>& local) const {
+  if (!layout_.halo_mode() || space_.leaves().empty()) return local;
+  // The leaf of each local index: leaves lie in the arrays in the run's order.
+  std::vector<std::pair<std::size_t, int>> starts;
+  for (int c : space_.leaves())
+    if (keeps_current(c) && space_.cell(c).count > 0) starts.emplace_back(space_.cell(c).first, c);
+  std::sort(starts.begin(), starts.end());
+  std::vector<std::size_t> out(local.size());
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    auto it = std::upper_bound(starts.begin(), starts.end(), std::pair{local[k], std::numeric_limits<int>::max()});
+    if (it == starts.begin()) throw std::logic_error(fmt::format("particle {} is in no leaf held here", local[k]));
+    --it;
+    out[k] = run_first_[static_cast<std::size_t>(it->second)] + (local[k] - it->first);
+  }
+  return out;
+}
+
+}  // namespace fountain
