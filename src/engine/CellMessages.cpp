@@ -124,16 +124,6 @@ void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, i
   moved_gas_fields(r, space, gas, c, moved, ghost_results_sent);
 }
 
-void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c) {
-  const Cell& cell = space.cell(c);
-  for_each_field_in(gas, message::recut_inputs, PackFields{w, cell.first, cell.count});
-}
-
-void unpack_recut_inputs(MessageReader& r, const Space& space, GasParticles& gas, int c) {
-  const Cell& cell = space.cell(c);
-  for_each_field_in(gas, message::recut_inputs, UnpackFields{r, cell.first, cell.count});
-}
-
 template <class Store>
 void pack_particle_range(MessageWriter& w, Store& store, std::size_t first, std::size_t count) {
   for_each_field_in(store, message::whole_state, PackFields{w, first, count});

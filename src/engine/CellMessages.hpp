@@ -144,12 +144,6 @@ void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
                       bool ghost_results_sent = false);
 
-// What a recut needs of leaf c's gas so that every rank cuts the same cells: positions, and
-// h for the leaves' covers. (What the rebuild reads besides, the leaves' v_max and step ends,
-// each rank works out from the particles it owned, and a maximum over ranks settles it.)
-void pack_recut_inputs(MessageWriter& w, const Space& space, GasParticles& gas, int c);
-void unpack_recut_inputs(MessageReader& r, const Space& space, GasParticles& gas, int c);
-
 // Every field of the gas particles at `indices` (in that order).
 void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);
 void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices);

@@ -51,9 +51,8 @@ inline constexpr Messages ghost_bin = 1u << 3;
 inline constexpr Messages ghost_force_inputs = 1u << 4;
 // Halo mode's changed gas (pack_moved_gas), second part: what a step writes after the ghost.
 inline constexpr Messages halo_after_ghost = 1u << 5;
-// What a recut reads of a leaf another rank holds (pack_recut_inputs).
-inline constexpr Messages recut_inputs = 1u << 6;
-// A particle sent to a rank that holds its leaf anew after a recut (pack_gas_particles).
+// A particle sent whole to another rank (pack_gas_particles): to its top cell's owner at a
+// recut, or to a holder of its leaf that had no copy of it.
 inline constexpr Messages migration = 1u << 7;
 }  // namespace message
 
