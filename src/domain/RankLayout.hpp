@@ -32,7 +32,6 @@ class RankLayout {
   // In halo mode: whether rank r keeps leaf c current; the ranks that do, sorted.
   bool holds(int r, int c) const;
   const std::vector<std::vector<int>>& holders() const { return holders_; }
-  std::vector<std::vector<int>> take_holders() { return std::move(holders_); }
 
   // Owners for the leaves of a fresh recut. The cut along the curve stays while it still
   // shares the work well (judged once it has stood repartition_min_steps); else it is made

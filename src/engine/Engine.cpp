@@ -508,7 +508,7 @@ std::size_t Engine::activate(Phase phase) {
   for (int c : leaves)
     if (cell_active_[c] && keeps_current(c)) {
       const Cell& cell = space_.cell(c);
-      // In halo mode only the owner's count is sure (other copies may be stale).
+      // In halo mode the holders of a leaf see its particles too: only the owner counts them.
       const bool count = !layout_.halo_mode() || mine(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
         const bool a = ctx_->is_active(i);
