@@ -124,20 +124,13 @@ void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, i
   moved_gas_fields(r, space, gas, c, moved, ghost_results_sent);
 }
 
-template <class Store>
-void pack_particle_range(MessageWriter& w, Store& store, std::size_t first, std::size_t count) {
-  for_each_field_in(store, message::whole_state, PackFields{w, first, count});
+void pack_particle_range(MessageWriter& w, GasParticles& gas, std::size_t first, std::size_t count) {
+  for_each_field_in(gas, message::whole_state, PackFields{w, first, count});
 }
 
-template <class Store>
-void unpack_particle_range(MessageReader& r, Store& store, std::size_t first, std::size_t count) {
-  for_each_field_in(store, message::whole_state, UnpackFields{r, first, count});
+void unpack_particle_range(MessageReader& r, GasParticles& gas, std::size_t first, std::size_t count) {
+  for_each_field_in(gas, message::whole_state, UnpackFields{r, first, count});
 }
-
-template void pack_particle_range(MessageWriter&, GasParticles&, std::size_t, std::size_t);
-template void pack_particle_range(MessageWriter&, CollisionlessParticles&, std::size_t, std::size_t);
-template void unpack_particle_range(MessageReader&, GasParticles&, std::size_t, std::size_t);
-template void unpack_particle_range(MessageReader&, CollisionlessParticles&, std::size_t, std::size_t);
 
 void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
   for_each_field_in(gas, message::migration, FieldPicks<MessageWriter>{w, indices});

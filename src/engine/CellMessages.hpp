@@ -148,12 +148,10 @@ void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, i
 void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);
 void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices);
 
-// The particles [first, first + count) of a store, with every field a cell's whole state
-// carries; unpacked into the places [first, first + count) of a store at least that long.
-template <class Store>
-void pack_particle_range(MessageWriter& w, Store& store, std::size_t first, std::size_t count);
-template <class Store>
-void unpack_particle_range(MessageReader& r, Store& store, std::size_t first, std::size_t count);
+// The gas particles [first, first + count), with every field a cell's whole state carries;
+// unpacked into the places [first, first + count) of a store at least that long.
+void pack_particle_range(MessageWriter& w, GasParticles& gas, std::size_t first, std::size_t count);
+void unpack_particle_range(MessageReader& r, GasParticles& gas, std::size_t first, std::size_t count);
 
 // What leaf c's ghost computed, which other cells' force loops read.
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c);

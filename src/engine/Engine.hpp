@@ -250,8 +250,7 @@ class Engine {
   void exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
                               const char* what, bool every_leaf = false);
   void finish_exchanges();
-  template <class Store, class RangeOf>
-  void stream_store(Store& store, std::size_t total, RangeOf range_of, const StatePiece<Store>& consume);
+  void stream_gas(const StatePiece<GasParticles>& consume);  // stream_state's, in halo mode
   void combine_wake_requests();  // the limiter's requests of every rank, combined on every rank
   // Calls fn(i) for each gas particle of the leaves drifted in this run of the graph (that
   // this rank holds): the force loop asks to wake only neighbours of active particles, which
@@ -273,6 +272,7 @@ class Engine {
   // the recut left in them) and copies of the other leaves it reads, from their owners, all in
   // the run's order.
   void hold_leaves();
+  std::vector<int> leaves_in_run_order() const;  // halo mode: by run_first_
   // Which step end a particle of bin `bin` whose step began at ti_begin is due at, seen from
   // a recut at ti_current_.
   IntegerTime due_end(TimeBin bin, IntegerTime ti_begin) const;

@@ -42,10 +42,7 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
     std::iota(own.begin(), own.end(), std::size_t{0});
     std::iota(r.place.begin(), r.place.end(), std::uint64_t{0});
   } else {
-    std::vector<int> leaves = space_.leaves();
-    std::sort(leaves.begin(), leaves.end(), [&](int a, int b) {
-      return run_first_[static_cast<std::size_t>(a)] < run_first_[static_cast<std::size_t>(b)];
-    });
+    const std::vector<int> leaves = leaves_in_run_order();
     for (int c : leaves) {
       r.old_first.push_back(run_first_[static_cast<std::size_t>(c)]);
       r.old_holders.push_back(layout_.holders()[static_cast<std::size_t>(c)]);
@@ -202,7 +199,6 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
         end = std::min(end, due_end(gas_.time_bin[i], gas_.ti_begin[i]));
       }
       cell.ti_end_min = end;
-      cell.ti_drift = ti_current_;
     }
   }
 
@@ -239,27 +235,24 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
 void Engine::hold_leaves() {
   const HaloRecut& r = halo_recut_;
   // The leaves in the run's order; where each of this rank's own leaves starts in r.owned.
-  std::vector<int> leaves = space_.leaves();
-  std::sort(leaves.begin(), leaves.end(), [&](int a, int b) {
-    return run_first_[static_cast<std::size_t>(a)] < run_first_[static_cast<std::size_t>(b)];
-  });
-  std::vector<std::size_t> in_owned(space_.cells().size(), kNotHeld);
-  std::size_t n_owned = 0;
-  for (int c : leaves)
-    if (mine(c)) {
-      in_owned[static_cast<std::size_t>(c)] = n_owned;
-      n_owned += space_.cell(c).count;
-    }
+  const std::vector<int> leaves = leaves_in_run_order();
+  // Where each leaf that `picked` takes starts when they are laid end to end in the run's
+  // order (kNotHeld for the others), and how many particles they hold.
+  auto laid_end_to_end = [&](auto picked) {
+    std::vector<std::size_t> first(space_.cells().size(), kNotHeld);
+    std::size_t n = 0;
+    for (int c : leaves)
+      if (picked(c)) {
+        first[static_cast<std::size_t>(c)] = n;
+        n += space_.cell(c).count;
+      }
+    return std::pair{std::move(first), n};
+  };
+  const auto [in_owned, n_owned] = laid_end_to_end([&](int c) { return mine(c); });
   if (n_owned != r.owned.size())
     throw std::logic_error(fmt::format("{} particles owned, {} in the leaves", r.owned.size(), n_owned));
   // This rank's arrays are to hold the leaves it keeps current, in the run's order.
-  std::vector<std::size_t> local_first(space_.cells().size(), kNotHeld);
-  std::size_t held = 0;
-  for (int c : leaves)
-    if (keeps_current(c)) {
-      local_first[static_cast<std::size_t>(c)] = held;
-      held += space_.cell(c).count;
-    }
+  const auto [local_first, held] = laid_end_to_end([&](int c) { return keeps_current(c); });
   std::vector<std::size_t> order(held, kNotHeld);  // for each new place here: the particle now in gas_
   for (int c : leaves)
     if (mine(c))
@@ -336,15 +329,24 @@ void Engine::hold_leaves() {
   halo_recut_ = {};
 }
 
+std::vector<int> Engine::leaves_in_run_order() const {
+  // Leaves are numbered by the depth-first walk of each top cell in turn after all the top
+  // cells, so a top cell that is itself a leaf comes before split ones: sort by the run's order.
+  std::vector<int> leaves = space_.leaves();
+  std::sort(leaves.begin(), leaves.end(), [&](int a, int b) {
+    return run_first_[static_cast<std::size_t>(a)] < run_first_[static_cast<std::size_t>(b)];
+  });
+  return leaves;
+}
+
 std::size_t Engine::gas_count() const { return layout_.halo_mode() && !space_.leaves().empty() ? gas_total_ : gas_.size(); }
 
 std::vector<std::size_t> Engine::run_places(const std::vector<std::size_t>& local) const {
   if (!layout_.halo_mode() || space_.leaves().empty()) return local;
-  // The leaf of each local index: leaves lie in the arrays in the run's order.
+  // The leaf of each local index: the held leaves lie in the arrays in the run's order.
   std::vector<std::pair<std::size_t, int>> starts;
-  for (int c : space_.leaves())
-    if (keeps_current(c) && space_.cell(c).count > 0) starts.emplace_back(space_.cell(c).first, c);
-  std::sort(starts.begin(), starts.end());
+  for (int c : leaves_in_run_order())
+    if (keeps_current(c)) starts.emplace_back(space_.cell(c).first, c);
   std::vector<std::size_t> out(local.size());
   for (std::size_t k = 0; k < local.size(); ++k) {
     auto it = std::upper_bound(starts.begin(), starts.end(), std::pair{local[k], std::numeric_limits<int>::max()});

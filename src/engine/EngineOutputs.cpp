@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cstdint>
 #include <stdexcept>
-#include <tuple>
 
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
@@ -12,57 +11,35 @@
 
 namespace fountain {
 
-namespace {
-
-// A run of consecutive leaves (in particle order) with one owner: one stretch of the arrays.
-struct OwnedRun {
-  int owner;
-  std::size_t first, count;
-};
-
-// `range_of(c)`: {the cell's first particle in the run's order, its count, its first in this
-// rank's arrays}. A run's first is this rank's (meaningful where it owns the run).
-template <class RangeOf>
-std::vector<OwnedRun> owned_runs(const Space& space, const domain::RankLayout& layout, RangeOf range_of) {
-  std::vector<std::pair<std::size_t, int>> by_first;
-  for (int c : space.leaves()) {
-    const auto [run_first, count, local_first] = range_of(c);
-    if (count > 0) by_first.emplace_back(run_first, c);
-  }
-  std::sort(by_first.begin(), by_first.end());
+void Engine::stream_gas(const StatePiece<GasParticles>& consume) {
+  // Runs of consecutive leaves in the run's order with one owner: the leaves cover the run's
+  // order end to end, and a rank's arrays hold its leaves in that order, so a run is one
+  // stretch of its owner's arrays.
+  struct OwnedRun {
+    int owner;
+    std::size_t first, count;  // first: in the owner's arrays
+  };
   std::vector<OwnedRun> runs;
-  std::size_t run_end = 0;
-  for (const auto& [run_first, c] : by_first) {
-    const auto [unused, count, local_first] = range_of(c);
-    const int owner = layout.owner(c);
-    // Leaves next to each other in the run's order with one owner lie next to each other in
-    // its arrays too (its arrays hold leaves in the run's order).
-    if (!runs.empty() && runs.back().owner == owner && run_end == run_first) {
-      runs.back().count += count;
-    } else {
-      runs.push_back({owner, local_first, count});
-    }
-    run_end = run_first + count;
-  }
-  return runs;
-}
-
-}  // namespace
-
-template <class Store, class RangeOf>
-void Engine::stream_store(Store& store, std::size_t total, RangeOf range_of, const StatePiece<Store>& consume) {
-  const std::vector<OwnedRun> runs = owned_runs(space_, layout_, range_of);
   std::size_t covered = 0;
-  for (const OwnedRun& run : runs) covered += run.count;
-  if (covered != total) throw std::logic_error(fmt::format("the leaves hold {} of {} particles", covered, total));
+  for (int c : leaves_in_run_order()) {
+    const Cell& cell = space_.cell(c);
+    const int owner = layout_.owner(c);
+    if (!runs.empty() && runs.back().owner == owner) {
+      runs.back().count += cell.count;
+    } else {
+      runs.push_back({owner, cell.first, cell.count});
+    }
+    covered += cell.count;
+  }
+  if (covered != gas_total_) throw std::logic_error(fmt::format("the leaves hold {} of {} particles", covered, gas_total_));
   const std::size_t chunk = std::max<std::size_t>(1, config_.output.gather_particles);
   // Both sides walk the same runs in the same order, and messages from one sender arrive in
   // the order sent: rank 0 knows from whom each piece comes and how many there are.
   if (rank() == 0) {
-    Store piece;
+    GasParticles piece;
     for (const OwnedRun& run : runs) {
       if (run.owner == 0) {
-        consume(store, run.first, run.count);
+        consume(gas_, run.first, run.count);
         continue;
       }
       for (std::size_t left = run.count; left > 0;) {
@@ -86,7 +63,7 @@ void Engine::stream_store(Store& store, std::size_t total, RangeOf range_of, con
         buffer.clear();
         MessageWriter w(buffer);
         w.put(static_cast<std::uint64_t>(n));
-        pack_particle_range(w, store, at, n);
+        pack_particle_range(w, gas_, at, n);
         ranks_->send(0, buffer);
       }
     }
@@ -103,9 +80,7 @@ void Engine::stream_state(const StatePiece<GasParticles>& gas, const StatePiece<
     return;
   }
   // Halo mode holds no collisionless particles.
-  stream_store(gas_, gas_total_, [&](int c) {
-    return std::tuple{run_first_[static_cast<std::size_t>(c)], space_.cell(c).count, space_.cell(c).first};
-  }, gas);
+  stream_gas(gas);
 }
 
 }  // namespace fountain

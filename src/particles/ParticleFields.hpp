@@ -8,9 +8,7 @@
 // and in restart files: reordering rows changes the message layouts and the restart format
 // (io/RestartFile.hpp's version).
 #pragma once
-#include <algorithm>
 #include <cstddef>
-#include <span>
 #include <tuple>
 #include <type_traits>
 #include <vector>
@@ -250,37 +248,6 @@ template <class Store, class F>
 void for_each_field_of(Store& store, F&& f) {
   std::apply([&](const auto&... row) { (f(row.info, store.*row.member), ...); },
              field_table<std::remove_const_t<Store>>());
-}
-
-// Copies every field of the particles from[indices[k]] to to[at + k] (`to` already that long).
-template <class Store>
-void copy_particles(const Store& from, std::span<const std::size_t> indices, Store& to, std::size_t at) {
-  std::apply(
-      [&](const auto&... row) {
-        auto copy = [&](const auto& source, auto& target) {
-          for (std::size_t k = 0; k < indices.size(); ++k) target[at + k] = source[indices[k]];
-        };
-        (copy(from.*row.member, to.*row.member), ...);
-      },
-      field_table<Store>());
-}
-
-// Moves the particles [from, from + count) of a store to [to, to + count), every field; the
-// two ranges may overlap.
-template <class Store>
-void move_particles(Store& store, std::size_t from, std::size_t to, std::size_t count) {
-  if (from == to || count == 0) return;
-  std::apply(
-      [&](const auto&... row) {
-        auto move = [&](auto& v) {
-          const auto first = v.begin() + static_cast<std::ptrdiff_t>(from);
-          const auto last = first + static_cast<std::ptrdiff_t>(count);
-          if (to > from) std::copy_backward(first, last, v.begin() + static_cast<std::ptrdiff_t>(to + count));
-          else std::copy(first, last, v.begin() + static_cast<std::ptrdiff_t>(to));
-        };
-        (move(store.*row.member), ...);
-      },
-      field_table<Store>());
 }
 
 // Calls f(field) for the fields of `store` that travel in `part` (one message::), in table order.
