@@ -227,53 +227,82 @@ DatasetInfo File::dataset_info(const std::string& dataset) const {
 
 // --- Reading datasets ------------------------------------------------------------------
 
-std::vector<double> File::read_doubles(const std::string& dataset) const {
+File::Selection File::select_rows(const Id& ds, const std::string& dataset, const RowRange* rows) const {
+  Selection out;
+  out.file = Id(H5Dget_space(ds.get()), H5Sclose);
+  if (!out.file.valid()) fail(dataset, "cannot read size");
+  const hssize_t n = H5Sget_simple_extent_npoints(out.file.get());
+  if (n < 0) fail(dataset, "cannot read size");
+  if (rows == nullptr) {
+    out.elements = static_cast<std::size_t>(n);
+    return out;
+  }
+  const int rank = H5Sget_simple_extent_ndims(out.file.get());
+  std::vector<hsize_t> dims(static_cast<std::size_t>(std::max(rank, 0)));
+  if (rank < 1 || H5Sget_simple_extent_dims(out.file.get(), dims.data(), nullptr) < 0)
+    fail(dataset, "cannot select rows of a scalar dataset");
+  if (rows->first + rows->count > dims[0])
+    fail(dataset, fmt::format("has {} rows, fewer than the {} to {} asked for", dims[0], rows->first,
+                              rows->first + rows->count));
+  std::vector<hsize_t> start(dims.size(), 0), size = dims;
+  start[0] = rows->first;
+  size[0] = rows->count;
+  out.elements = 1;
+  for (hsize_t d : size) out.elements *= d;
+  const hsize_t elements = out.elements;
+  out.memory = Id(H5Screate_simple(1, &elements, nullptr), H5Sclose);
+  if (!out.memory.valid() ||
+      H5Sselect_hyperslab(out.file.get(), H5S_SELECT_SET, start.data(), nullptr, size.data(), nullptr) < 0)
+    fail(dataset, fmt::format("cannot select rows {} to {}", rows->first, rows->first + rows->count));
+  return out;
+}
+
+std::vector<double> File::read_doubles(const std::string& dataset, const RowRange* rows) const {
   const DatasetInfo info = dataset_info(dataset);
   if (info.type_class != H5T_FLOAT && info.type_class != H5T_INTEGER)
     fail(dataset, "holds " + describe_class(info.type_class) + " data, expected numbers");
   Id ds = open_dataset(dataset);
-  Id space(H5Dget_space(ds.get()), H5Sclose);
-  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
-  if (n < 0) fail(dataset, "cannot read size");
-  std::vector<double> values(static_cast<std::size_t>(n));
-  if (n > 0 && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data()) < 0)
+  const Selection sel = select_rows(ds, dataset, rows);
+  std::vector<double> values(sel.elements);
+  if (sel.elements > 0 && H5Dread(ds.get(), H5T_NATIVE_DOUBLE, rows ? sel.memory.get() : H5S_ALL,
+                                  rows ? sel.file.get() : H5S_ALL, H5P_DEFAULT, values.data()) < 0)
     fail(dataset, "cannot read data (damaged or truncated file?)");
   return values;
 }
 
-std::vector<Vec3> File::read_vec3(const std::string& dataset) const {
+std::vector<Vec3> File::read_vec3(const std::string& dataset, const RowRange* rows) const {
   const DatasetInfo info = dataset_info(dataset);
   if (info.dims.size() != 2 || info.dims[1] != 3) {
     std::ostringstream shape;
     for (std::size_t d = 0; d < info.dims.size(); ++d) shape << (d ? " x " : "") << info.dims[d];
     fail(dataset, "has shape (" + shape.str() + "), expected N x 3");
   }
-  const std::vector<double> flat = read_doubles(dataset);
+  const std::vector<double> flat = read_doubles(dataset, rows);
   std::vector<Vec3> out(flat.size() / 3);
   for (std::size_t i = 0; i < out.size(); ++i) out[i] = {flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]};
   return out;
 }
 
-std::vector<std::uint64_t> File::read_uint64(const std::string& dataset) const {
+std::vector<std::uint64_t> File::read_uint64(const std::string& dataset, const RowRange* rows) const {
   const DatasetInfo info = dataset_info(dataset);
   if (info.type_class != H5T_INTEGER)
     fail(dataset, "holds " + describe_class(info.type_class) + " data, expected integers");
   Id ds = open_dataset(dataset);
-  Id space(H5Dget_space(ds.get()), H5Sclose);
-  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
-  if (n < 0) fail(dataset, "cannot read size");
-  std::vector<std::uint64_t> out(static_cast<std::size_t>(n));
-  if (n == 0) return out;
+  const Selection sel = select_rows(ds, dataset, rows);
+  const hid_t memory = rows ? sel.memory.get() : H5S_ALL, file = rows ? sel.file.get() : H5S_ALL;
+  const std::uint64_t first = rows ? rows->first : 0;
+  std::vector<std::uint64_t> out(sel.elements);
+  if (out.empty()) return out;
   if (info.is_signed) {
     std::vector<std::int64_t> tmp(out.size());
-    if (H5Dread(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, tmp.data()) < 0)
+    if (H5Dread(ds.get(), H5T_NATIVE_INT64, memory, file, H5P_DEFAULT, tmp.data()) < 0)
       fail(dataset, "cannot read data (damaged or truncated file?)");
     for (std::size_t i = 0; i < tmp.size(); ++i) {
       if (tmp[i] < 0)
-        fail(dataset, "entry " + std::to_string(i) + " is " + std::to_string(tmp[i]) + " (must be non-negative)");
+        fail(dataset, "entry " + std::to_string(first + i) + " is " + std::to_string(tmp[i]) + " (must be non-negative)");
       out[i] = static_cast<std::uint64_t>(tmp[i]);
     }
-  } else if (H5Dread(ds.get(), H5T_NATIVE_UINT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0) {
+  } else if (H5Dread(ds.get(), H5T_NATIVE_UINT64, memory, file, H5P_DEFAULT, out.data()) < 0) {
     fail(dataset, "cannot read data (damaged or truncated file?)");
   }
   return out;

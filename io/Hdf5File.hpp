@@ -73,6 +73,11 @@ struct DatasetInfo {
   std::uint64_t rows() const { return dims.empty() ? 1 : dims[0]; }
 };
 
+// A stretch of a dataset's rows, [first, first + count): the share of a file one MPI rank reads.
+struct RowRange {
+  std::uint64_t first = 0, count = 0;
+};
+
 using StringAttributes = std::vector<std::pair<std::string, std::string>>;
 
 class File {
@@ -99,12 +104,13 @@ class File {
   DatasetInfo dataset_info(const std::string& dataset) const;
 
   // --- Reading datasets --------------------------------------------------------------------
+  // With `rows`, only those rows are read (a range past the dataset's end is an error).
   // Every element converted to double (any float or integer type), row-major and flat.
-  std::vector<double> read_doubles(const std::string& dataset) const;
+  std::vector<double> read_doubles(const std::string& dataset, const RowRange* rows = nullptr) const;
   // An N x 3 dataset as N vectors (throws on any other shape).
-  std::vector<Vec3> read_vec3(const std::string& dataset) const;
+  std::vector<Vec3> read_vec3(const std::string& dataset, const RowRange* rows = nullptr) const;
   // Any integer type as uint64; negative values and non-integer types are errors.
-  std::vector<std::uint64_t> read_uint64(const std::string& dataset) const;
+  std::vector<std::uint64_t> read_uint64(const std::string& dataset, const RowRange* rows = nullptr) const;
   // A string dataset (fixed or variable length, scalar).
   std::string read_string(const std::string& dataset) const;
 
@@ -182,6 +188,13 @@ class File {
                              const std::vector<hsize_t>& dims, const void* data,
                              const StringAttributes& attributes);
   Id create_dataset(const std::string& dataset, hid_t file_type, const std::vector<hsize_t>& dims);
+  // The file and memory selections of `rows` of a dataset (all of it without `rows`), and
+  // how many elements they hold.
+  struct Selection {
+    Id file, memory;
+    std::size_t elements = 0;
+  };
+  Selection select_rows(const Id& ds, const std::string& dataset, const RowRange* rows) const;
   template <class T>
   void write_pieces(const std::string& dataset, hid_t file_type, hid_t memory_type, std::size_t rows,
                     std::size_t columns, const std::function<void(std::size_t, std::span<T>)>& fill);

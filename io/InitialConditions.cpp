@@ -54,12 +54,15 @@ void check_shape(const File& file, const Species& sp, const std::string& dataset
                                    info.dims[0], sp.type, n, sp.noun));
 }
 
-// The ParticleIDs of one type; an ID that appears twice within the type is an error.
-std::vector<std::uint64_t> read_ids(const File& file, const Species& sp, std::uint64_t n) {
+// The ParticleIDs of one type (of `rows` only, with it); an ID that appears twice within the
+// type is an error, checked over every row where `check_all` is set.
+std::vector<std::uint64_t> read_ids(const File& file, const Species& sp, std::uint64_t n,
+                                    const hdf5::RowRange* rows = nullptr, bool check_all = true) {
   const std::string dataset = sp.dataset("ParticleIDs");
   if (!file.exists(dataset)) file.fail(dataset, "dataset not found");
   check_shape(file, sp, dataset, n, false);
-  const std::vector<std::uint64_t> ids = file.read_uint64(dataset);
+  if (!check_all) return file.read_uint64(dataset, rows);
+  std::vector<std::uint64_t> ids = file.read_uint64(dataset);
   std::vector<std::size_t> order(ids.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(),
@@ -68,15 +71,18 @@ std::vector<std::uint64_t> read_ids(const File& file, const Species& sp, std::ui
     if (ids[order[k]] == ids[order[k - 1]])
       file.fail(dataset, fmt::format("particle ID {} appears more than once (entries {} and {}); IDs must be unique",
                                      ids[order[k]], order[k - 1], order[k]));
-  return ids;
+  if (rows == nullptr) return ids;
+  return {ids.begin() + static_cast<std::ptrdiff_t>(rows->first),
+          ids.begin() + static_cast<std::ptrdiff_t>(rows->first + rows->count)};
 }
 
 std::vector<Vec3> read_vectors(const File& file, const Species& sp, const char* name, std::uint64_t n,
-                               const std::vector<std::uint64_t>& ids, const char* what) {
+                               const std::vector<std::uint64_t>& ids, const char* what,
+                               const hdf5::RowRange* rows = nullptr) {
   const std::string dataset = sp.dataset(name);
   if (!file.exists(dataset)) file.fail(dataset, "dataset not found");
   check_shape(file, sp, dataset, n, true);
-  std::vector<Vec3> values = file.read_vec3(dataset);
+  std::vector<Vec3> values = file.read_vec3(dataset, rows);
   for (std::size_t i = 0; i < values.size(); ++i) {
     const Vec3& v = values[i];
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
@@ -85,18 +91,20 @@ std::vector<Vec3> read_vectors(const File& file, const Species& sp, const char* 
   return values;
 }
 
-std::vector<double> read_scalars(const File& file, const Species& sp, const char* name, std::uint64_t n) {
+std::vector<double> read_scalars(const File& file, const Species& sp, const char* name, std::uint64_t n,
+                                 const hdf5::RowRange* rows = nullptr) {
   const std::string dataset = sp.dataset(name);
   check_shape(file, sp, dataset, n, false);
-  return file.read_doubles(dataset);
+  return file.read_doubles(dataset, rows);
 }
 
 // The Masses dataset, or else the type's /Header/MassTable entry; every mass must be positive.
 std::vector<double> read_masses(const File& file, const Species& sp, std::uint64_t n,
-                                const std::vector<std::uint64_t>& ids, const std::vector<double>* mass_table) {
+                                const std::vector<std::uint64_t>& ids, const std::vector<double>* mass_table,
+                                const hdf5::RowRange* rows = nullptr) {
   const std::string dataset = sp.dataset("Masses");
   if (file.exists(dataset)) {
-    std::vector<double> mass = read_scalars(file, sp, "Masses", n);
+    std::vector<double> mass = read_scalars(file, sp, "Masses", n, rows);
     for (std::size_t i = 0; i < mass.size(); ++i)
       if (!std::isfinite(mass[i]) || mass[i] <= 0.0)
         file.fail(dataset, fmt::format("particle ID {} has mass {} (must be positive)", ids[i], mass[i]));
@@ -114,7 +122,7 @@ std::vector<double> read_masses(const File& file, const Species& sp, std::uint64
                                    sp.type, sp.noun));
   if (!std::isfinite(table_mass) || table_mass < 0.0)
     file.fail("/Header/MassTable", fmt::format("entry {} ({}) is {} (must be positive)", sp.type, sp.noun, table_mass));
-  return std::vector<double>(n, table_mass);
+  return std::vector<double>(rows ? rows->count : n, table_mass);
 }
 
 // NumPart_ThisFile[type] (0 where the array is shorter), checked against NumPart_Total (with
@@ -242,6 +250,13 @@ void check_internal_energies(const std::string& where, const std::vector<std::ui
                                      where));
 }
 
+// The gas rows one rank of options.share_ranks reads of a file's n.
+hdf5::RowRange gas_share(std::uint64_t n, const IcReadOptions& options) {
+  const auto r = static_cast<std::uint64_t>(options.share_rank), ranks = static_cast<std::uint64_t>(options.share_ranks);
+  const std::uint64_t first = n * r / ranks;
+  return {first, n * (r + 1) / ranks - first};
+}
+
 // A GADGET binary file (format 1 or 2) as initial conditions.
 InitialConditions read_gadget_binary_ics(const std::string& path, const IcReadOptions& options) {
   const GadgetSnapshot snap = read_gadget_binary(path);
@@ -295,12 +310,24 @@ InitialConditions read_gadget_binary_ics(const std::string& path, const IcReadOp
   }
   if (ic.gas.size() + ic.dm.size() == 0) throw InputError(fmt::format("{}: holds no particles", path));
   check_ids_across_species(path, ic.gas, ic.dm, [](fountain::Species) { return "block ID"; });
+  ic.gas_total = n;
+  if (options.share_ranks > 1) {
+    const hdf5::RowRange rows = gas_share(n, options);
+    std::vector<std::size_t> keep(rows.count);
+    std::iota(keep.begin(), keep.end(), static_cast<std::size_t>(rows.first));
+    ic.gas.permute(keep);
+    ic.gas_first = rows.first;
+  }
   return ic;
 }
 
 }  // namespace
 
 InitialConditions read_initial_conditions(const std::string& path, const IcReadOptions& options) {
+  if (options.share_ranks < 1 || options.share_rank < 0 || options.share_rank >= options.share_ranks ||
+      (options.share_ranks > 1 && options.cosmological))
+    throw std::logic_error(fmt::format("initial conditions asked for share {} of {}{}", options.share_rank,
+                                       options.share_ranks, options.cosmological ? " of a cosmological file" : ""));
   namespace fs = std::filesystem;
   std::error_code ec;
   // A GADGET binary set split over files is named without its ".0".
@@ -381,38 +408,43 @@ InitialConditions read_initial_conditions(const std::string& path, const IcReadO
     if (!file.exists(kGas))
       file.fail(kGas, fmt::format("group not found, but /Header/NumPart_ThisFile[0] announces {} gas particles", n));
 
-    const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
-    const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
-    const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
-    const std::vector<double> mass = read_masses(file, sp, n, ids, table);
+    // A share's rows only (all of them without one).
+    const hdf5::RowRange share = gas_share(n, options);
+    const hdf5::RowRange* rows = options.share_ranks > 1 ? &share : nullptr;
+    const std::vector<std::uint64_t> ids = read_ids(file, sp, n, rows, options.share_rank == 0);
+    const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates", rows);
+    const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity", rows);
+    const std::vector<double> mass = read_masses(file, sp, n, ids, table, rows);
+    ic.gas_first = share.first;
+    const std::size_t count = ids.size();
 
     const std::string u_name = kGasSpecies.dataset("InternalEnergy");
     std::vector<double> u;
     if (file.exists(u_name)) {
-      u = read_scalars(file, sp, "InternalEnergy", n);
+      u = read_scalars(file, sp, "InternalEnergy", n, rows);
     } else if (n > 0 && !options.cosmological) {
       file.fail(u_name, "dataset not found (the gas needs a specific internal energy)");
     }
     check_internal_energies(path + ": " + u_name, ids, u, options.cosmological, ic.has_internal_energy);
-    if (!ic.has_internal_energy) u.assign(n, 0.0);
+    if (!ic.has_internal_energy) u.assign(count, 0.0);
 
     std::vector<double> h;
     const std::string h_name = kGasSpecies.dataset("SmoothingLength");
     ic.has_smoothing_length = file.exists(h_name);
     if (ic.has_smoothing_length) {
-      h = read_scalars(file, sp, "SmoothingLength", n);
+      h = read_scalars(file, sp, "SmoothingLength", n, rows);
       for (std::size_t i = 0; i < h.size(); ++i)
         if (!std::isfinite(h[i]) || h[i] < 0.0)
           file.fail(h_name, fmt::format("particle ID {} has smoothing length {} (must be finite and non-negative)",
                                         ids[i], h[i]));
     } else {
-      h.assign(n, 0.0);
+      h.assign(count, 0.0);
     }
 
     // --- Fill the particles ---------------------------------------------------------------
     GasParticles& gas = ic.gas;
-    gas.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    gas.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
       gas.id[i] = ids[i];
       gas.mass[i] = mass[i];
       gas.x[i] = x[i];
@@ -426,13 +458,15 @@ InitialConditions read_initial_conditions(const std::string& path, const IcReadO
 
   }
 
+  ic.gas_total = n;
+
   // --- Dark matter ----------------------------------------------------------------------
   ic.dm = read_collisionless(file, kDarkMatterSpecies, n_dm, table, fountain::Species::DarkMatter);
   if (options.cosmological)
     for (const Species& low : {kType2, kType3, kType5})
       append(ic.dm, read_collisionless(file, low, particle_count(file, this_file, low), table,
                                        fountain::Species::LowResDarkMatter));
-  if (ic.gas.size() + ic.dm.size() == 0) file.fail("/Header/NumPart_ThisFile", "announces no particles");
+  if (n + ic.dm.size() == 0) file.fail("/Header/NumPart_ThisFile", "announces no particles");
   check_ids_across_species(path, ic.gas, ic.dm, [](fountain::Species s) {
     return s == fountain::Species::DarkMatter ? "/PartType1/ParticleIDs" : "/PartType2, 3 or 5/ParticleIDs";
   });

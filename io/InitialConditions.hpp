@@ -32,6 +32,9 @@ struct InitialConditions {
   IcFileUnits units;
   IcFileCosmology cosmology;
   std::string format = "GADGET HDF5";  // or "GADGET binary format 1" / "... format 2"
+  // The gas read is the file's rows [gas_first, gas_first + gas.size()) of gas_total (all of
+  // them unless IcReadOptions asked for a share).
+  std::size_t gas_first = 0, gas_total = 0;
 };
 
 struct IcReadOptions {
@@ -39,6 +42,13 @@ struct IcReadOptions {
   // internal energy may be missing or 0 (the run sets it), and the low-resolution dark matter
   // of types 2, 3 and 5 is read (as Species::LowResDarkMatter, masses per particle).
   bool cosmological = false;
+  // A share of the gas for one of share_ranks MPI ranks that each hold their own (runs
+  // without gravity or collisionless particles): the file's gas rows [n r / R, n (r + 1) / R)
+  // for r = share_rank, R = share_ranks, read by hyperslab from HDF5 (a GADGET binary file is
+  // read whole and cut). Every check of the values still holds per particle; that no gas ID
+  // repeats is checked by share_rank 0 alone, which reads every ID for it. Not with
+  // `cosmological`.
+  int share_rank = 0, share_ranks = 1;
 };
 
 // Reads GADGET-layout HDF5 or GADGET binary (format 1 or 2, one file or path.0 .. path.(n-1),

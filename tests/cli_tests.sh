@@ -213,6 +213,41 @@ import h5py, sys
 with h5py.File('out1/snapshot_0001.hdf5', 'r') as f:
     sys.exit(0 if 'PartType4' in f and f['PartType4/Coordinates'].shape[0] > 0 else 1)" || fail "no star particle was spawned"
     fi ;;
+  mpi_shared_input)
+    # Across ranks that read the gas in shares (Sod: no gravity), bad input is still named as
+    # one rank names it: two particles of different shares at one point (every rank names the
+    # same pair), a bad mass in the last share, an ID repeated far from its first use.
+    mpirun_n() { ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$@"; }
+    "$bin" ic sod -n 24 -o good.hdf5 > /dev/null 2>&1 || fail "cannot write the Sod ICs"
+    "$python" -c "
+import h5py, shutil
+for name in ('same', 'mass', 'ids'):
+    shutil.copy('good.hdf5', name + '.hdf5')
+with h5py.File('same.hdf5', 'a') as f:
+    x = f['PartType0/Coordinates']; x[-5] = x[10]
+with h5py.File('mass.hdf5', 'a') as f:
+    m = f['PartType0/Masses']; m[-2] = -1.0
+with h5py.File('ids.hdf5', 'a') as f:
+    i = f['PartType0/ParticleIDs']; i[-3] = i[4]
+with h5py.File('good.hdf5', 'r') as f:
+    ids = f['PartType0/ParticleIDs'][:]
+    open('ids.txt', 'w').write('%d %d %d %d\n' % (ids[10], ids[-5], ids[-2], ids[4]))"
+    read a b m r < ids.txt
+    refused_by() {  # refused_by PATTERN RANKS
+      params "$3" out "" > /dev/null
+      set +e
+      if [ "$2" = 1 ]; then "$bin" run params.yml -q > out.txt 2>&1; else mpirun_n "$2" "$bin" run params.yml -q > out.txt 2>&1; fi
+      status=$?
+      set -e
+      [ "$status" -ne 0 ] || { cat out.txt; fail "$3 on $2 ranks ran"; }
+      grep -q -- "$1" out.txt || { cat out.txt; fail "$3 on $2 ranks: the message does not mention '$1'"; }
+      echo "ok ($3, $2 ranks): $(grep -m1 -- "$1" out.txt)"
+    }
+    for n in 1 3; do
+      refused_by "same.hdf5: gas particles ID $a and ID $b lie at the same position" "$n" same.hdf5
+      refused_by "particle ID $m has mass -1" "$n" mass.hdf5
+      refused_by "particle ID $r appears more than once" "$n" ids.hdf5
+    done ;;
   mpi_restart_after_kill)
     # A 2-rank run stopped half-way after a restart set, as a kill would stop it, and
     # restarted on 1, 2 and 3 ranks, ends as the uninterrupted 1-rank run does, bit for bit.

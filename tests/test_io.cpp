@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -334,6 +335,84 @@ TEST_F(IoTest, DuplicateIdsAreAnError) {
   const std::string msg = read_error(path, h);
   EXPECT_TRUE(contains(msg, "/PartType0/ParticleIDs")) << msg;
   EXPECT_TRUE(contains(msg, "particle ID " + std::to_string(h.ids[2]))) << msg;
+}
+
+// Ranks that hold their own particles read the gas in shares: laid end to end, the shares are
+// the whole read, bit for bit, for any number of ranks (with more ranks than particles, some
+// shares are empty), with a MassTable instead of masses, and from GADGET binary files.
+TEST_F(IoTest, GasReadInSharesIsTheWholeReadCut) {
+  const GasParticles gas = make_gas(37, 1000);
+  const std::string path = file("ics.hdf5");
+  fountain::io::write_initial_conditions(path, gas, {1.5, 2.5, 3.5}, true, 0.75);
+  HandWritten table = hand_written(11);
+  table.write_masses = false;
+  table.mass_table[0] = 0.25;
+  const std::string table_path = file("table.hdf5");
+  write_by_hand(table_path, table);
+  for (const std::string& p : {path, table_path}) {
+    const auto whole = fountain::io::read_initial_conditions(p);
+    EXPECT_EQ(whole.gas_first, 0u);
+    EXPECT_EQ(whole.gas_total, whole.gas.size());
+    for (int ranks : {1, 2, 3, 5, 16, 40}) {
+      std::size_t next = 0;
+      for (int r = 0; r < ranks; ++r) {
+        fountain::io::IcReadOptions options;
+        options.share_rank = r;
+        options.share_ranks = ranks;
+        const auto share = fountain::io::read_initial_conditions(p, options);
+        EXPECT_EQ(share.gas_total, whole.gas.size());
+        ASSERT_EQ(share.gas_first, next) << p << ", share " << r << " of " << ranks;
+        for (std::size_t i = 0; i < share.gas.size(); ++i) {
+          const std::size_t w = next + i;
+          ASSERT_LT(w, whole.gas.size());
+          EXPECT_EQ(share.gas.id[i], whole.gas.id[w]);
+          EXPECT_EQ(share.gas.mass[i], whole.gas.mass[w]);
+          EXPECT_EQ(share.gas.x[i], whole.gas.x[w]);
+          EXPECT_EQ(share.gas.v_full[i], whole.gas.v_full[w]);
+          EXPECT_EQ(share.gas.u_full[i], whole.gas.u_full[w]);
+          EXPECT_EQ(share.gas.h[i], whole.gas.h[w]);
+        }
+        next += share.gas.size();
+        EXPECT_EQ(share.box_size, whole.box_size);
+        EXPECT_EQ(share.time, whole.time);
+      }
+      EXPECT_EQ(next, whole.gas.size()) << p << " in " << ranks << " shares";
+    }
+  }
+}
+
+// A share's bad particle is named as one rank names it; that no ID repeats is checked by the
+// first share alone, which reads every ID however far apart the repeats lie.
+TEST_F(IoTest, SharesNameTheirBadParticlesAndTheFirstFindsRepeatedIds) {
+  const std::string path = file("ics.hdf5");
+  HandWritten h = hand_written(30);
+  h.mass[25] = -1.0;
+  write_by_hand(path, h);
+  auto share_error = [&](int r, int ranks) {
+    fountain::io::IcReadOptions options;
+    options.share_rank = r;
+    options.share_ranks = ranks;
+    try {
+      fountain::io::read_initial_conditions(path, options);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(share_error(0, 3), "");
+  EXPECT_EQ(share_error(1, 3), "");
+  const std::string bad = share_error(2, 3);
+  EXPECT_TRUE(contains(bad, "particle ID " + std::to_string(h.ids[25]) + " has mass -1")) << bad;
+  h.mass[25] = 1.0;
+  h.ids[28] = h.ids[1];
+  write_by_hand(path, h);
+  const std::string repeated = share_error(0, 3);
+  EXPECT_TRUE(contains(repeated, "particle ID " + std::to_string(h.ids[1]) + " appears more than once")) << repeated;
+  EXPECT_EQ(share_error(2, 3), "");
+  fountain::io::IcReadOptions cosmological;
+  cosmological.cosmological = true;
+  cosmological.share_ranks = 2;
+  EXPECT_THROW(fountain::io::read_initial_conditions(path, cosmological), std::logic_error);
 }
 
 // Single-precision floats, 32-bit IDs and a 3-vector BoxSize, written with the raw C API.

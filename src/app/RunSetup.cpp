@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <stdexcept>
 #include <string_view>
 #include <tuple>
 #include <vector>
@@ -18,6 +21,7 @@
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
 #include "core/PeriodicWrap.hpp"
+#include "domain/RankExchange.hpp"
 #include "params/ParameterFile.hpp"
 
 namespace fountain {
@@ -58,44 +62,98 @@ std::string resolve_ic_path(const ParameterFile& params) {
 // Gas particles at one position have no defined density: the smoothing length cannot
 // converge. Checked before the run, where the cause can still be named (in a periodic box,
 // positions are compared once folded into it: a BoxSize smaller than the particles' extent
-// folds them onto each other).
-void check_distinct_positions(const io::InitialConditions& ic, bool periodic, const std::string& path) {
-  const std::size_t n = ic.gas.size();
-  std::vector<Vec3> x(ic.gas.x);
-  if (periodic)
-    for (Vec3& p : x) p = wrap_into_box(p, ic.box_size);
-  std::vector<std::size_t> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = i;
-  auto less = [&](std::size_t a, std::size_t b) {
-    return std::tie(x[a].x, x[a].y, x[a].z) < std::tie(x[b].x, x[b].y, x[b].z);
+// folds them onto each other). Across ranks that read shares of the gas, each position goes
+// to one rank by a hash of its bits, so that equal ones meet; every rank then names the same
+// pair, the smallest position's first two in the file's order, as one rank does.
+void check_distinct_positions(const io::InitialConditions& ic, bool periodic, const std::string& path,
+                              const domain::RankExchange* ranks) {
+  struct Placed {
+    Vec3 x;
+    std::uint64_t id, row;
   };
-  std::sort(order.begin(), order.end(), less);
-  for (std::size_t k = 1; k < n; ++k) {
-    const std::size_t a = order[k - 1], b = order[k];
-    if (x[a] != x[b]) continue;
-    std::size_t same = 2;
-    while (k + 1 < n && x[order[k + 1]] == x[a]) ++k, ++same;
-    throw InputError(fmt::format(
-        "{}: gas particles ID {} and ID {}{} lie at the same position ({}, {}, {}){}, where SPH cannot give them a "
-        "density{}",
-        path, ic.gas.id[a], ic.gas.id[b], same > 2 ? fmt::format(" (and {} more)", same - 2) : "", x[a].x, x[a].y,
-        x[a].z, periodic ? " once folded into the periodic box" : "",
-        periodic ? fmt::format(" (is /Header/BoxSize = ({}, {}, {}) smaller than the particles' extent?)", ic.box_size.x,
-                               ic.box_size.y, ic.box_size.z)
-                 : ""));
+  const std::size_t n = ic.gas.size();
+  std::vector<Placed> pool;
+  pool.reserve(n);
+  std::vector<domain::RankExchange::Buffer> to(ranks ? static_cast<std::size_t>(ranks->size()) : 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    Vec3 x = periodic ? wrap_into_box(ic.gas.x[i], ic.box_size) : ic.gas.x[i];
+    for (int k = 0; k < 3; ++k) x[k] += 0.0;  // -0 is 0: equal positions hash alike
+    const Placed p{x, ic.gas.id[i], ic.gas_first + i};
+    if (!ranks) {
+      pool.push_back(p);
+      continue;
+    }
+    std::uint64_t hash = 0x9e3779b97f4a7c15ULL;
+    for (int k = 0; k < 3; ++k) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &x[k], sizeof bits);
+      hash = (hash ^ bits) * 0xff51afd7ed558ccdULL;
+      hash ^= hash >> 33;
+    }
+    const auto q = static_cast<int>(hash % static_cast<std::uint64_t>(ranks->size()));
+    if (q == ranks->rank()) {
+      pool.push_back(p);
+    } else {
+      auto& b = to[static_cast<std::size_t>(q)];
+      const auto* bytes = reinterpret_cast<const char*>(&p);
+      b.insert(b.end(), bytes, bytes + sizeof p);
+    }
   }
+  if (ranks)
+    for (const auto& in : ranks->alltoall(to)) {
+      const std::size_t at = pool.size();
+      pool.resize(at + in.size() / sizeof(Placed));
+      if (!in.empty()) std::memcpy(static_cast<void*>(pool.data() + at), in.data(), in.size());
+    }
+  auto before = [](const Placed& a, const Placed& b) {
+    return std::tie(a.x.x, a.x.y, a.x.z, a.row) < std::tie(b.x.x, b.x.y, b.x.z, b.row);
+  };
+  std::sort(pool.begin(), pool.end(), before);
+  struct Coincidence {
+    std::uint64_t found = 0, same = 0;
+    Placed a, b;
+  };
+  Coincidence first;
+  for (std::size_t k = 1; k < pool.size() && !first.found; ++k) {
+    if (pool[k].x != pool[k - 1].x) continue;
+    first = {1, 2, pool[k - 1], pool[k]};
+    while (k + 1 < pool.size() && pool[k + 1].x == pool[k - 1].x) ++k, ++first.same;
+  }
+  if (ranks)
+    for (const auto& theirs : ranks->allgather_values(std::span<const Coincidence>(&first, 1), "coinciding gas"))
+      if (theirs[0].found && (!first.found || before(theirs[0].a, first.a))) first = theirs[0];
+  if (!first.found) return;
+  const Vec3& x = first.a.x;
+  throw InputError(fmt::format(
+      "{}: gas particles ID {} and ID {}{} lie at the same position ({}, {}, {}){}, where SPH cannot give them a "
+      "density{}",
+      path, first.a.id, first.b.id, first.same > 2 ? fmt::format(" (and {} more)", first.same - 2) : "", x.x, x.y, x.z,
+      periodic ? " once folded into the periodic box" : "",
+      periodic ? fmt::format(" (is /Header/BoxSize = ({}, {}, {}) smaller than the particles' extent?)", ic.box_size.x,
+                             ic.box_size.y, ic.box_size.z)
+               : ""));
 }
 
 // A periodic run's particles must fit its box: ones that span more than the box (beyond the
-// drift of a snapshot's last steps) mean BoxSize is not the box they were laid in.
-void check_fits_periodic_box(const io::InitialConditions& ic, const std::string& path) {
+// drift of a snapshot's last steps) mean BoxSize is not the box they were laid in. Across
+// ranks that read shares, the span is of every share.
+void check_fits_periodic_box(const io::InitialConditions& ic, const std::string& path,
+                             const domain::RankExchange* ranks) {
   if (!(ic.box_size.x > 0 && ic.box_size.y > 0 && ic.box_size.z > 0))
     throw InputError(fmt::format("{}: periodic run needs a positive /Header/BoxSize", path));
   constexpr double kSlack = 1.1;
+  std::array<double, 6> extent{1e300, 1e300, 1e300, 1e300, 1e300, 1e300};  // lo, then -hi
+  for (const auto* xs : {&ic.gas.x, &ic.dm.x})
+    for (const Vec3& p : *xs)
+      for (int k = 0; k < 3; ++k) {
+        extent[static_cast<std::size_t>(k)] = std::min(extent[static_cast<std::size_t>(k)], p[k]);
+        extent[static_cast<std::size_t>(k + 3)] = std::min(extent[static_cast<std::size_t>(k + 3)], -p[k]);
+      }
+  if (ranks)
+    for (const auto& theirs : ranks->allgather_values(std::span<const double>(extent), "extent of the particles"))
+      for (std::size_t j = 0; j < 6; ++j) extent[j] = std::min(extent[j], theirs[j]);
   for (int k = 0; k < 3; ++k) {
-    double lo = 1e300, hi = -1e300;
-    for (const auto* xs : {&ic.gas.x, &ic.dm.x})
-      for (const Vec3& p : *xs) lo = std::min(lo, p[k]), hi = std::max(hi, p[k]);
+    const double lo = extent[static_cast<std::size_t>(k)], hi = -extent[static_cast<std::size_t>(k + 3)];
     if (hi - lo > kSlack * ic.box_size[k])
       throw InputError(fmt::format("{}: the particles span {} along {} (from {} to {}), more than the periodic box's "
                                    "side /Header/BoxSize = {}: is BoxSize in the particles' units?",
@@ -150,7 +208,17 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
   }
   io::IcReadOptions read_options;
   read_options.cosmological = config.comoving.enabled;
+  // Across ranks that each hold their own particles, each reads a share of the gas (a restart
+  // reads its files whole, as before).
+  std::unique_ptr<domain::RankExchange> ranks;
+  if (options.ranks > 1 && config.ranks_hold_shares() && !options.restart) {
+    ranks = domain::RankExchange::world();
+    if (!ranks) throw std::logic_error("a run of several ranks found no ranks");
+    read_options.share_rank = ranks->rank();
+    read_options.share_ranks = ranks->size();
+  }
   start.ic = io::read_initial_conditions(ic_path, read_options);
+  if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total};
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.
   if (config.comoving.enabled) {
@@ -162,8 +230,8 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     fmt::print(stderr, "warning: {} = {} differs from /Header/Time = {} of {}; the run starts at {}\n",
                params.where("run.t_begin"), config.t_begin, ic.time, ic_path, config.t_begin);
   }
-  if (config.space.periodic) check_fits_periodic_box(ic, ic_path);
-  check_distinct_positions(ic, config.space.periodic, ic_path);
+  if (config.space.periodic) check_fits_periodic_box(ic, ic_path, ranks.get());
+  check_distinct_positions(ic, config.space.periodic, ic_path, ranks.get());
   if (options.restart) {
     io::RestartState& state = start.restart;
     state = io::read_restart(restart_path(params));

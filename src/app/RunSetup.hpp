@@ -1,6 +1,7 @@
 // A run's set-up: its parameters, the output folder held, the initial conditions read and checked, a restart file's state.
 #pragma once
 #include <memory>
+#include <optional>
 
 #include "app/OutputFolder.hpp"
 #include "app/Simulation.hpp"
@@ -15,6 +16,7 @@ struct RunStart {
   RunConfig config;
   io::InitialConditions ic;       // the restart file's particles in place of the IC's on a restart
   io::RestartState restart;       // a restart's state beyond its particles (empty on a fresh run)
+  std::optional<Engine::GasShare> share;  // the gas in `ic` is this rank's share of the file's
   std::unique_ptr<OutputFolderLock> lock;  // rank 0's, held for the whole run
 };
 

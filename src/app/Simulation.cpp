@@ -57,8 +57,8 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   const auto t_start = std::chrono::steady_clock::now();
   RunStart start = prepare_run(params, options);
   const RunConfig& config = start.config;
-  Engine engine(config, std::move(start.ic.gas), std::move(start.ic.dm));
-  // Every rank holds the whole state; rank 0 alone writes files and reports.
+  Engine engine(config, std::move(start.ic.gas), std::move(start.ic.dm), start.share);
+  // Rank 0 alone writes files and reports.
   const bool io_rank = engine.rank() == 0;
   const bool quiet = options.quiet || !io_rank;
   const std::string rank_suffix = engine.ranks() > 1 ? fmt::format("_rank{}", engine.rank()) : "";

@@ -45,6 +45,7 @@ struct RunOptions {
   // a run killed there would: tests of restarts stop a run deterministically.
   long long abandon_after_steps = 0;
   int rank = 0;  // this process's MPI rank: rank 0 alone holds the output folder's lock
+  int ranks = 1;  // the run's MPI ranks
 };
 
 // Runs the parameter file's problem to run.t_end, or continues it from its restart file

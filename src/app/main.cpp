@@ -209,6 +209,7 @@ int main(int argc, char** argv) {
       options.abandon_after_steps = abandon_after;
       if (threads_opt->count() > 0) options.threads = threads;
       options.rank = mpi.rank();
+      options.ranks = mpi.size();
       const ParameterFile params = ParameterFile::load(param_path);
       const RunSummary s = run_simulation(params, options);
       // Stopped by SIGTERM after writing a restart file: EX_TEMPFAIL, so that job scripts can

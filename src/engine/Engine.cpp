@@ -4,10 +4,12 @@
 #include <tbb/info.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 
 #include "core/IdealGas.hpp"
 #include "core/Error.hpp"
@@ -44,7 +46,7 @@ std::vector<int> pinned_cpus(const RunConfig& config) {
 }
 }  // namespace
 
-Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm)
+Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm, std::optional<GasShare> share)
     : config_(config),
       gas_(std::move(gas)),
       dm_(std::move(dm)),
@@ -52,8 +54,11 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
       executor_(config.threads, pinned_cpus(config)) {
   timeline_.t_begin = config_.t_begin;
   timeline_.t_end = config_.t_end;
+  gas_total_ = share ? share->total : gas_.size();
+  holds_read_share_ = share.has_value();
+  share_first_ = share ? share->first : 0;
   // Dark matter alone (a collisionless cosmological run) needs gravity; nothing at all is no run.
-  if (gas_.size() == 0 && (dm_.size() == 0 || !config_.gravity.enabled)) throw InputError("no gas particles to simulate");
+  if (gas_total_ == 0 && (dm_.size() == 0 || !config_.gravity.enabled)) throw InputError("no gas particles to simulate");
   if (dm_.size() > 0 && !config_.gravity.enabled)
     throw InputError(fmt::format("the initial conditions hold {} dark matter particles but gravity is off "
                                  "(set gravity.enabled: true)",
@@ -85,9 +90,10 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   // and change particles anywhere: those runs keep every rank's copy whole, as do runs with
   // collisionless particles (which without gravity only drift).
   if (ranks_)
-    layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(),
-                                 !config_.gravity.enabled && !config_.star_formation.enabled && dm_.size() == 0,
+    layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(), config_.ranks_hold_shares() && dm_.size() == 0,
                                  config_.repartition_imbalance, config_.repartition_min_steps);
+  if (share && !layout_.halo_mode())
+    throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
   if (config_.star_formation.enabled) setup_star_formation();
   if (config_.comoving.enabled) setup_comoving();
   if (config_.gravity.enabled && config_.space.periodic) setup_periodic_gravity();
@@ -286,17 +292,28 @@ IntegerTime Engine::to_ticks(double t) const {
 void Engine::guess_smoothing_lengths() {
   bool missing = false;
   for (double h : gas_.h) missing = missing || !(h > 0.0);
+  // Ranks that read shares guess alike, from the extent of every share.
+  if (holds_read_share_) missing = ranks_->any(missing);
   if (!missing) return;
   double guess = config_.smoothing_length_guess;
   if (!(guess > 0.0)) {
-    Vec3 lo = gas_.x[0], hi = gas_.x[0];
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
     for (const auto& x : gas_.x)
       for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], x[k]), hi[k] = std::max(hi[k], x[k]);
+    if (holds_read_share_) {
+      const std::array<double, 6> mine{lo.x, lo.y, lo.z, -hi.x, -hi.y, -hi.z};
+      for (const auto& b : ranks_->allgather_values(std::span<const double>(mine), "extent of the gas"))
+        for (int k = 0; k < 3; ++k) {
+          lo[k] = std::min(lo[k], b[static_cast<std::size_t>(k)]);
+          hi[k] = std::max(hi[k], -b[static_cast<std::size_t>(k + 3)]);
+        }
+    }
     Vec3 ext = config_.space.periodic ? config_.space.box_size : hi - lo;
     const double longest = std::max({ext.x, ext.y, ext.z});
     for (int k = 0; k < 3; ++k) ext[k] = std::max(ext[k], 1e-3 * longest);
     const double volume = ext.x * ext.y * ext.z;
-    guess = std::cbrt(3.0 * config_.hydro.neighbours * volume / (4.0 * M_PI * static_cast<double>(gas_.size())));
+    guess = std::cbrt(3.0 * config_.hydro.neighbours * volume / (4.0 * M_PI * static_cast<double>(gas_total_)));
   }
   for (double& h : gas_.h)
     if (!(h > 0.0)) h = guess;

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -60,7 +61,14 @@ struct StepInfo {
 
 class Engine {
  public:
-  Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm = {});
+  // The gas one rank read of a run across ranks that hold shares (RunConfig::ranks_hold_shares):
+  // the file's rows [first, first + gas.size()) of `total`.
+  struct GasShare {
+    std::size_t first = 0, total = 0;
+  };
+  // Without `share`, the gas is every particle of the run.
+  Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm = {},
+         std::optional<GasShare> share = std::nullopt);
   ~Engine();
 
   // First densities (twice, so the MSPH rule sees real densities), forces and timesteps.
@@ -342,10 +350,16 @@ class Engine {
   // they start in this rank's arrays, for the leaves it keeps current), and how many there are.
   std::vector<std::size_t> run_first_;
   std::size_t gas_total_ = 0;
+  // Halo mode before the first recut: this rank's arrays hold the share of the gas it read,
+  // from the run's place share_first_ on (the file's order, in which one rank recuts them).
+  bool holds_read_share_ = false;
+  std::size_t share_first_ = 0;
   std::vector<std::byte> permute_scratch_;  // halo mode's recut: one buffer, kept from one to the next
   // What a halo-mode recut hands on to hold_leaves.
   struct HaloRecut {
-    bool everyone = false;                    // every rank held every particle (the first recut)
+    bool everyone = false;                    // every rank held every particle (the first recut of a restart)
+    bool from_shares = false;                 // each rank held the share it read (the first recut)
+    std::vector<int> source;                  // then, per particle here: the rank that read it
     std::vector<std::uint64_t> place;         // per particle here: its place in the run's order before the recut
     std::vector<std::size_t> owned;           // this rank's particles (indices) in the recut's order
     std::vector<std::uint64_t> old_first;     // the leaves before the recut: where each began in the run's order

@@ -28,19 +28,25 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
   const auto nranks = static_cast<std::size_t>(ranks_->size());
   HaloRecut& r = halo_recut_;
   // Every particle this rank holds (all current) with its place in the run's order, and which
-  // it owns. At the first recut every rank holds every particle, as read, and takes all as
-  // its own: all then find the same box, counts and owners without a word, and none need be
-  // sent. Until this rank's arrays are made anew (hold_leaves) they keep every copy: the
-  // holders of a new leaf then need only be told which particles it holds.
-  r.everyone = space_.leaves().empty();
+  // it owns. At the first recut of a run each rank holds the share of the file it read, in
+  // the file's order, and owns it. At the first recut of a restart every rank holds every
+  // particle, as read, and takes all as its own: all then find the same box, counts and
+  // owners without a word, and none need be sent. Until this rank's arrays are made anew
+  // (hold_leaves) they keep every copy: the holders of a new leaf then need only be told
+  // which particles it holds.
+  const bool first_recut = space_.leaves().empty();
+  r.everyone = first_recut && !holds_read_share_;
+  r.from_shares = first_recut && holds_read_share_;
   std::vector<std::size_t> own;
   r.place.assign(gas_.size(), 0);
+  r.source.clear();
   r.old_first.clear();
   r.old_holders.clear();
-  if (r.everyone) {
+  if (first_recut) {
     own.resize(gas_.size());
     std::iota(own.begin(), own.end(), std::size_t{0});
-    std::iota(r.place.begin(), r.place.end(), std::uint64_t{0});
+    std::iota(r.place.begin(), r.place.end(), std::uint64_t{share_first_});
+    if (r.from_shares) r.source.assign(gas_.size(), me);
   } else {
     const std::vector<int> leaves = leaves_in_run_order();
     for (int c : leaves) {
@@ -144,6 +150,7 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
       const auto p = reader.get<std::uint64_t>();
       entries.push_back({reader.get<int>(), p, at + j});
       r.place.push_back(p);
+      if (r.from_shares) r.source.push_back(static_cast<int>(q));
     }
     gas_.resize(at + n);
     picked.resize(n);
@@ -258,16 +265,18 @@ void Engine::hold_leaves() {
     if (mine(c))
       std::copy_n(r.owned.begin() + static_cast<std::ptrdiff_t>(in_owned[static_cast<std::size_t>(c)]), space_.cell(c).count,
                   order.begin() + static_cast<std::ptrdiff_t>(local_first[static_cast<std::size_t>(c)]));
-  // Whether rank q held a current copy of the particle at `place` before the recut: it held
-  // that place's leaf (every rank held every particle before the first recut).
-  auto had_copy = [&](int q, std::uint64_t place) {
+  // Whether rank q held a current copy of particle i (here) before the recut: it held that
+  // particle's leaf, or read it (every rank held every particle before a restart's first recut).
+  auto had_copy = [&](int q, std::size_t i) {
     if (r.everyone) return true;
+    if (r.from_shares) return r.source[i] == q;
+    const std::uint64_t place = r.place[i];
     const auto l = static_cast<std::size_t>(std::upper_bound(r.old_first.begin(), r.old_first.end(), place) - r.old_first.begin()) - 1;
     const auto& h = r.old_holders[l];
     return std::binary_search(h.begin(), h.end(), q);
   };
-  // Where each particle this rank has (held before, or arrived in the recut) now lies, by
-  // place (at the first recut its place is its index).
+  // Where each particle this rank has (held before, read, or arrived in the recut) now lies,
+  // by place (at a restart's first recut its place is its index).
   std::vector<std::pair<std::uint64_t, std::size_t>> by_place;
   if (!r.everyone) {
     by_place.resize(r.place.size());
@@ -285,7 +294,7 @@ void Engine::hold_leaves() {
           const std::size_t from = in_owned[static_cast<std::size_t>(c)];
           for (std::size_t k = 0; k < space_.cell(c).count; ++k) {
             const std::size_t i = r.owned[from + k];
-            const bool copy = had_copy(q, r.place[i]);
+            const bool copy = had_copy(q, i);
             w.put(r.place[i]);
             w.put(static_cast<std::uint8_t>(copy));
             if (!copy) whole.push_back(i);
@@ -323,8 +332,9 @@ void Engine::hold_leaves() {
       "the leaves' holders");
   // The arrays: what this rank holds, in the run's order (in place, through one buffer).
   gas_.permute(order, {}, &permute_scratch_);
-  // After the first, the arrays hold a share of the particles read: the room for all goes.
-  if (r.everyone) gas_.for_each_field([](auto& field) { field.shrink_to_fit(); });
+  // After the first recut the arrays hold less than they did: the room for the rest goes.
+  if (r.everyone || r.from_shares) gas_.for_each_field([](auto& field) { field.shrink_to_fit(); });
+  holds_read_share_ = false;
   for (std::size_t c = 0; c < local_first.size(); ++c) space_.cell(static_cast<int>(c)).first = local_first[c];
   halo_recut_ = {};
 }
@@ -339,7 +349,7 @@ std::vector<int> Engine::leaves_in_run_order() const {
   return leaves;
 }
 
-std::size_t Engine::gas_count() const { return layout_.halo_mode() && !space_.leaves().empty() ? gas_total_ : gas_.size(); }
+std::size_t Engine::gas_count() const { return layout_.halo_mode() ? gas_total_ : gas_.size(); }
 
 std::vector<std::size_t> Engine::run_places(const std::vector<std::size_t>& local) const {
   if (!layout_.halo_mode() || space_.leaves().empty()) return local;

@@ -78,6 +78,10 @@ struct RunConfig {
   // The units' values in cgs without h: `units` itself in plain runs; a comoving run's
   // h-scaled units (Mpc/h, Msun/h) divided by h (what cooling and star formation convert with).
   Units physical_units() const;
+  // Across MPI ranks, whether each rank holds only its own particles and their neighbours
+  // (halo mode): runs without gravity, which reads every particle, and without star formation,
+  // whose spawning and feedback change particles anywhere. Such a run reads its gas in shares.
+  bool ranks_hold_shares() const { return !gravity.enabled && !star_formation.enabled; }
 
   // Reads and cross-checks the parameters (the start time is run.t_begin, given or default).
   static RunConfig from(const ParameterFile& p);
