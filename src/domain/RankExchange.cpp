@@ -249,6 +249,12 @@ void RankExchange::send(int, std::span<const char>) { no_mpi(); }
 std::span<const char> RankExchange::receive(int) { no_mpi(); }
 #endif
 
+void RankExchange::release_buffers() {
+  std::vector<char>().swap(gathered_);
+  std::vector<char>().swap(scattered_);
+  std::vector<char>().swap(sending_);
+}
+
 RankExchange::Traffic RankExchange::traffic() const {
   std::lock_guard lock(mutex_);
   return traffic_;

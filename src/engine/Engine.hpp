@@ -281,6 +281,14 @@ class Engine {
   // the run's order.
   void hold_leaves();
   std::vector<int> leaves_in_run_order() const;  // halo mode: by run_first_
+  // Sends each rank q the particles to[q] (indices into gas_), each after what `header`
+  // writes of it, in rounds of at most a bounded number of particles, so that no message
+  // grows with the run. The arrivals join the arrays' end (room for all made at once):
+  // `arrived(q, at, n, reader)` reads the headers of n particles from q, which are unpacked
+  // into at, at + 1, ... after it returns.
+  void send_gas_in_rounds(const std::vector<std::vector<std::size_t>>& to,
+                          const std::function<void(std::size_t, MessageWriter&)>& header,
+                          const std::function<void(int, std::size_t, std::size_t, MessageReader&)>& arrived);
   // Which step end a particle of bin `bin` whose step began at ti_begin is due at, seen from
   // a recut at ti_current_.
   IntegerTime due_end(TimeBin bin, IntegerTime ti_begin) const;

@@ -21,6 +21,9 @@ namespace {
 // array, so that a read of them fails at once rather than reading another leaf's.
 constexpr std::size_t kNotHeld = std::numeric_limits<std::size_t>::max() / 4;
 
+// The most particles a rank sends in one round of a recut's exchanges, to all ranks together.
+constexpr std::size_t kParticlesPerRound = 16384;
+
 }  // namespace
 
 void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& measured, const ForEach& for_each) {
@@ -125,39 +128,20 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
       to[q].push_back(own[k]);
     }
   }
-  to_rank_.resize(nranks);
-  for (std::size_t q = 0; q < nranks; ++q) {
-    auto& b = to_rank_[q];
-    b.clear();
-    if (static_cast<int>(q) == me) continue;
-    MessageWriter w(b);
-    w.put(static_cast<std::uint64_t>(to[q].size()));
-    for (std::size_t i : to[q]) {
-      w.put(r.place[i]);
-      w.put(space_.top_cell_at(gas_.x[i]));
-    }
-    pack_gas_particles(w, gas_, to[q]);
-  }
-  const auto in = ranks_->alltoall(to_rank_);
-  // The arrivals join this rank's arrays after what it holds.
-  std::vector<std::size_t> picked;
-  for (std::size_t q = 0; q < nranks; ++q) {
-    if (static_cast<int>(q) == me) continue;
-    MessageReader reader(in[q]);
-    const auto n = static_cast<std::size_t>(reader.get<std::uint64_t>());
-    const std::size_t at = gas_.size();
-    for (std::size_t j = 0; j < n; ++j) {
-      const auto p = reader.get<std::uint64_t>();
-      entries.push_back({reader.get<int>(), p, at + j});
-      r.place.push_back(p);
-      if (r.from_shares) r.source.push_back(static_cast<int>(q));
-    }
-    gas_.resize(at + n);
-    picked.resize(n);
-    std::iota(picked.begin(), picked.end(), at);
-    unpack_gas_particles(reader, gas_, picked);
-    if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more particles than it announced", q));
-  }
+  send_gas_in_rounds(
+      to,
+      [&](std::size_t i, MessageWriter& w) {
+        w.put(r.place[i]);
+        w.put(space_.top_cell_at(gas_.x[i]));
+      },
+      [&](int q, std::size_t at, std::size_t n, MessageReader& reader) {
+        for (std::size_t j = 0; j < n; ++j) {
+          const auto p = reader.get<std::uint64_t>();
+          entries.push_back({reader.get<int>(), p, at + j});
+          r.place.push_back(p);
+          if (r.from_shares) r.source.push_back(q);
+        }
+      });
   // This rank's top cells' particles ordered by top cell and, within one, by place: the order
   // they had, in which one rank's recut takes them.
   std::sort(entries.begin(), entries.end(),
@@ -283,12 +267,14 @@ void Engine::hold_leaves() {
     for (std::size_t i = 0; i < r.place.size(); ++i) by_place[i] = {r.place[i], i};
     std::sort(by_place.begin(), by_place.end());
   }
-  // Each owner tells the holders of its leaves which particles they hold, by place, and sends
-  // whole only those a holder had no current copy of.
-  std::vector<std::size_t> whole;
+  // Each owner tells the holders of its leaves which particles they hold, by place, and then
+  // sends whole only those a holder had no current copy of.
+  const auto nranks = static_cast<std::size_t>(ranks_->size());
+  std::vector<std::vector<std::size_t>> whole(nranks);  // to each rank, in the order named
+  std::vector<std::vector<std::size_t>> slots(nranks);  // from each rank: the new places they take
   exchange_with_ranks(
       [&](int q, MessageWriter& w) {
-        whole.clear();
+        auto& send = whole[static_cast<std::size_t>(q)];
         for (int c : leaves) {
           if (!mine(c) || !layout_.holds(q, c)) continue;
           const std::size_t from = in_owned[static_cast<std::size_t>(c)];
@@ -297,13 +283,12 @@ void Engine::hold_leaves() {
             const bool copy = had_copy(q, i);
             w.put(r.place[i]);
             w.put(static_cast<std::uint8_t>(copy));
-            if (!copy) whole.push_back(i);
+            if (!copy) send.push_back(i);
           }
         }
-        pack_gas_particles(w, gas_, whole);
       },
       [&](int q, MessageReader& reader) {
-        std::vector<std::size_t> slots;  // new places of the particles sent whole
+        auto& from = slots[static_cast<std::size_t>(q)];
         for (int c : leaves) {
           if (layout_.owner(c) != q || !keeps_current(c)) continue;
           const std::size_t first = local_first[static_cast<std::size_t>(c)];
@@ -318,18 +303,24 @@ void Engine::hold_leaves() {
                 throw std::logic_error(fmt::format("rank {} took rank {} to hold particle {}", q, layout_.rank(), p));
               order[first + k] = it->second;
             } else {
-              slots.push_back(first + k);
+              from.push_back(first + k);
             }
           }
         }
-        const std::size_t at = gas_.size();
-        gas_.resize(at + slots.size());
-        std::vector<std::size_t> into(slots.size());
-        std::iota(into.begin(), into.end(), at);
-        unpack_gas_particles(reader, gas_, into);
-        for (std::size_t j = 0; j < slots.size(); ++j) order[slots[j]] = at + j;
       },
       "the leaves' holders");
+  std::vector<std::size_t> taken(nranks, 0);
+  send_gas_in_rounds(whole, [](std::size_t, MessageWriter&) {},
+                     [&](int q, std::size_t at, std::size_t n, MessageReader&) {
+                       const auto& from = slots[static_cast<std::size_t>(q)];
+                       std::size_t& k = taken[static_cast<std::size_t>(q)];
+                       if (k + n > from.size())
+                         throw std::logic_error(fmt::format("rank {} sent more particles than it named", q));
+                       for (std::size_t j = 0; j < n; ++j) order[from[k++]] = at + j;
+                     });
+  for (std::size_t q = 0; q < nranks; ++q)
+    if (taken[q] != slots[q].size())
+      throw std::logic_error(fmt::format("rank {} sent {} of the {} particles it named", q, taken[q], slots[q].size()));
   // The arrays: what this rank holds, in the run's order (in place, through one buffer).
   gas_.permute(order, {}, &permute_scratch_);
   // After the first recut the arrays hold less than they did: the room for the rest goes.
@@ -337,6 +328,59 @@ void Engine::hold_leaves() {
   holds_read_share_ = false;
   for (std::size_t c = 0; c < local_first.size(); ++c) space_.cell(static_cast<int>(c)).first = local_first[c];
   halo_recut_ = {};
+}
+
+void Engine::send_gas_in_rounds(const std::vector<std::vector<std::size_t>>& to,
+                                const std::function<void(std::size_t, MessageWriter&)>& header,
+                                const std::function<void(int, std::size_t, std::size_t, MessageReader&)>& arrived) {
+  const int me = layout_.rank();
+  const auto nranks = static_cast<std::size_t>(ranks_->size());
+  // Every rank's counts to every rank: each knows how many particles arrive, and all how
+  // many rounds there are.
+  const std::size_t per_rank = std::max<std::size_t>(1, kParticlesPerRound / std::max<std::size_t>(1, nranks - 1));
+  std::vector<long long> sending(nranks, 0);
+  for (std::size_t q = 0; q < nranks; ++q)
+    if (static_cast<int>(q) != me) sending[q] = static_cast<long long>(to[q].size());
+  const auto plan = ranks_->allgather_values(std::span<const long long>(sending), "particles to send");
+  std::size_t arriving = 0, rounds = 0;
+  for (std::size_t q = 0; q < nranks; ++q) {
+    arriving += static_cast<std::size_t>(plan[q][static_cast<std::size_t>(me)]);
+    for (long long count : plan[q]) rounds = std::max(rounds, (static_cast<std::size_t>(count) + per_rank - 1) / per_rank);
+  }
+  // Room for exactly these: doubling the arrays' room would set the run's peak memory.
+  gas_.for_each_field([&](auto& field) { field.reserve(gas_.size() + arriving); });
+  to_rank_.resize(nranks);
+  std::vector<std::size_t> slice, into;
+  for (std::size_t round = 0; round < rounds; ++round) {
+    for (std::size_t q = 0; q < nranks; ++q) {
+      auto& b = to_rank_[q];
+      b.clear();
+      if (static_cast<int>(q) == me) continue;
+      const std::size_t from = std::min(to[q].size(), round * per_rank);
+      slice.assign(to[q].begin() + static_cast<std::ptrdiff_t>(from),
+                   to[q].begin() + static_cast<std::ptrdiff_t>(std::min(to[q].size(), from + per_rank)));
+      MessageWriter w(b);
+      w.put(static_cast<std::uint64_t>(slice.size()));
+      for (std::size_t i : slice) header(i, w);
+      pack_gas_particles(w, gas_, slice);
+    }
+    const auto in = ranks_->alltoall(to_rank_);
+    for (std::size_t q = 0; q < nranks; ++q) {
+      if (static_cast<int>(q) == me) continue;
+      MessageReader reader(in[q]);
+      const auto n = static_cast<std::size_t>(reader.get<std::uint64_t>());
+      const std::size_t at = gas_.size();
+      arrived(static_cast<int>(q), at, n, reader);
+      gas_.resize(at + n);
+      into.resize(n);
+      std::iota(into.begin(), into.end(), at);
+      unpack_gas_particles(reader, gas_, into);
+      if (!reader.done()) throw std::logic_error(fmt::format("rank {} sent more particles than it announced", q));
+    }
+  }
+  // The buffers of the largest exchange (a run's first recut, where most particles move) go.
+  for (auto& b : to_rank_) std::vector<char>().swap(b);
+  ranks_->release_buffers();
 }
 
 std::vector<int> Engine::leaves_in_run_order() const {
