@@ -113,9 +113,28 @@ std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>
 std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buffer>& to) const {
   const auto n = static_cast<std::size_t>(size_);
   if (to.size() != n) throw std::logic_error("alltoall needs one buffer per rank");
-  std::vector<long long> out_sizes(n), in_sizes(n);
+  // MPI wants one contiguous send buffer (kept, like the receiving one, so that it is not
+  // zero-filled again at every exchange).
+  std::vector<std::size_t> sizes(n, 0);
+  std::size_t total = 0;
   for (std::size_t r = 0; r < n; ++r)
-    out_sizes[r] = r == static_cast<std::size_t>(rank_) ? 0 : static_cast<long long>(to[r].size());
+    if (r != static_cast<std::size_t>(rank_)) total += sizes[r] = to[r].size();
+  if (sending_.size() < total) sending_.resize(total);
+  std::size_t at = 0;
+  for (std::size_t r = 0; r < n; ++r) {
+    if (sizes[r] > 0) std::memcpy(sending_.data() + at, to[r].data(), sizes[r]);
+    at += sizes[r];
+  }
+  return alltoall(std::span<const char>(sending_.data(), total), sizes);
+}
+
+std::vector<std::span<const char>> RankExchange::alltoall(std::span<const char> packed,
+                                                          std::span<const std::size_t> sizes) const {
+  const auto n = static_cast<std::size_t>(size_);
+  if (sizes.size() != n || sizes[static_cast<std::size_t>(rank_)] != 0)
+    throw std::logic_error("alltoall needs one size per rank, this rank's 0");
+  std::vector<long long> out_sizes(n), in_sizes(n);
+  for (std::size_t r = 0; r < n; ++r) out_sizes[r] = static_cast<long long>(sizes[r]);
   check(MPI_Alltoall(out_sizes.data(), 1, MPI_LONG_LONG, in_sizes.data(), 1, MPI_LONG_LONG, impl_->comm),
         "Alltoall(sizes)");
   std::vector<int> send_counts(n), send_offsets(n), recv_counts(n), recv_offsets(n);
@@ -128,13 +147,9 @@ std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buff
     recv_offsets[r] = as_count(in_total);
     in_total += static_cast<std::size_t>(in_sizes[r]);
   }
-  // MPI wants one contiguous send buffer (kept, like the receiving one, so that it is not
-  // zero-filled again at every exchange).
-  if (sending_.size() < out_total) sending_.resize(out_total);
-  for (std::size_t r = 0; r < n; ++r)
-    if (send_counts[r] > 0) std::memcpy(sending_.data() + send_offsets[r], to[r].data(), to[r].size());
+  if (out_total != packed.size()) throw std::logic_error("alltoall's sizes do not add up to its buffer");
   if (scattered_.size() < in_total) scattered_.resize(in_total);
-  check(MPI_Alltoallv(sending_.data(), send_counts.data(), send_offsets.data(), MPI_BYTE, scattered_.data(),
+  check(MPI_Alltoallv(packed.data(), send_counts.data(), send_offsets.data(), MPI_BYTE, scattered_.data(),
                       recv_counts.data(), recv_offsets.data(), MPI_BYTE, impl_->comm),
         "Alltoallv");
   std::vector<std::span<const char>> in(n);
@@ -240,6 +255,9 @@ bool RankExchange::any(bool) const { no_mpi(); }
 long long RankExchange::sum(long long) const { no_mpi(); }
 std::vector<std::span<const char>> RankExchange::allgather(std::span<const char>) const { no_mpi(); }
 std::vector<std::span<const char>> RankExchange::alltoall(const std::vector<Buffer>&) const { no_mpi(); }
+std::vector<std::span<const char>> RankExchange::alltoall(std::span<const char>, std::span<const std::size_t>) const {
+  no_mpi();
+}
 int RankExchange::post_recv(int, int, std::size_t) { no_mpi(); }
 void RankExchange::test_recvs(std::span<const int>, std::vector<int>&) { no_mpi(); }
 const RankExchange::Buffer& RankExchange::wait_recv(int) { no_mpi(); }

@@ -50,6 +50,9 @@ class RankExchange {
   // Each rank's buffer `to[q]` goes to rank q alone (this rank's own is skipped): what every
   // rank sent to this one, indexed by sender, as views valid until the next alltoall.
   std::vector<std::span<const char>> alltoall(const std::vector<Buffer>& to) const;
+  // The same from one buffer that holds the messages to ranks 0, 1, ... end to end, sizes[q]
+  // bytes each (this rank's own empty): MPI sends from it directly, with no copy.
+  std::vector<std::span<const char>> alltoall(std::span<const char> packed, std::span<const std::size_t> sizes) const;
 
   // Point to point: receives are posted before the tasks that need them run (their handle
   // is an index), sends are posted by tasks and completed together once the graph is done.

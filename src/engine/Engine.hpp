@@ -378,7 +378,10 @@ class Engine {
   std::uint64_t recut_bytes_ = 0;           // sent by the recuts: their inputs, the migrations
   std::vector<char> drifted_;               // per cell: drifted in this run of the graph
   std::vector<double> wake_radiated_;       // per cell: energy radiated by the wake's undoing of kicks
-  std::vector<std::vector<char>> to_rank_;  // halo mode's messages, one per rank, reused
+  // Halo mode's messages to ranks 0, 1, ... end to end in one buffer (MPI sends from it as it
+  // is), with each one's size; reused.
+  std::vector<char> to_ranks_;
+  std::vector<std::size_t> to_rank_sizes_;
 };
 
 }  // namespace fountain

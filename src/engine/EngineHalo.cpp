@@ -13,14 +13,15 @@ namespace fountain {
 void Engine::exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
                                  const std::function<void(int, MessageReader&)>& unpack, const char* what) {
   const int n = ranks_->size();
-  to_rank_.resize(static_cast<std::size_t>(n));
+  to_ranks_.clear();
+  to_rank_sizes_.assign(static_cast<std::size_t>(n), 0);
+  MessageWriter w(to_ranks_);
   for (int q = 0; q < n; ++q) {
-    auto& b = to_rank_[static_cast<std::size_t>(q)];
-    b.clear();
-    MessageWriter w(b);
+    const std::size_t before = to_ranks_.size();
     if (q != layout_.rank()) pack(q, w);
+    to_rank_sizes_[static_cast<std::size_t>(q)] = to_ranks_.size() - before;
   }
-  const auto in = ranks_->alltoall(to_rank_);
+  const auto in = ranks_->alltoall(to_ranks_, to_rank_sizes_);
   for (int r = 0; r < n; ++r) {
     if (r == layout_.rank()) continue;
     MessageReader reader(in[static_cast<std::size_t>(r)]);

@@ -349,22 +349,23 @@ void Engine::send_gas_in_rounds(const std::vector<std::vector<std::size_t>>& to,
   }
   // Room for exactly these: doubling the arrays' room would set the run's peak memory.
   gas_.for_each_field([&](auto& field) { field.reserve(gas_.size() + arriving); });
-  to_rank_.resize(nranks);
   std::vector<std::size_t> slice, into;
   for (std::size_t round = 0; round < rounds; ++round) {
+    to_ranks_.clear();
+    to_rank_sizes_.assign(nranks, 0);
+    MessageWriter w(to_ranks_);
     for (std::size_t q = 0; q < nranks; ++q) {
-      auto& b = to_rank_[q];
-      b.clear();
       if (static_cast<int>(q) == me) continue;
+      const std::size_t before = to_ranks_.size();
       const std::size_t from = std::min(to[q].size(), round * per_rank);
       slice.assign(to[q].begin() + static_cast<std::ptrdiff_t>(from),
                    to[q].begin() + static_cast<std::ptrdiff_t>(std::min(to[q].size(), from + per_rank)));
-      MessageWriter w(b);
       w.put(static_cast<std::uint64_t>(slice.size()));
       for (std::size_t i : slice) header(i, w);
       pack_gas_particles(w, gas_, slice);
+      to_rank_sizes_[q] = to_ranks_.size() - before;
     }
-    const auto in = ranks_->alltoall(to_rank_);
+    const auto in = ranks_->alltoall(to_ranks_, to_rank_sizes_);
     for (std::size_t q = 0; q < nranks; ++q) {
       if (static_cast<int>(q) == me) continue;
       MessageReader reader(in[q]);
@@ -379,7 +380,7 @@ void Engine::send_gas_in_rounds(const std::vector<std::vector<std::size_t>>& to,
     }
   }
   // The buffers of the largest exchange (a run's first recut, where most particles move) go.
-  for (auto& b : to_rank_) std::vector<char>().swap(b);
+  std::vector<char>().swap(to_ranks_);
   ranks_->release_buffers();
 }
 
