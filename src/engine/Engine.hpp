@@ -297,6 +297,12 @@ class Engine {
   // rank r sent, which it must take whole (`what` names it if not).
   void exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
                            const std::function<void(int, MessageReader&)>& unpack, const char* what);
+  // All-to-alls in rounds of bounded size: each rank sends every rank, for each of its own
+  // leaves (in the order of `leaves`) that `travels`, what `pack(q, c, w)` writes, and
+  // `unpack(r, c, reader)` reads what rank r wrote of its leaf c.
+  void exchange_leaves_in_rounds(const std::vector<int>& leaves, const std::function<bool(int)>& travels,
+                                 const std::function<void(int, int, MessageWriter&)>& pack,
+                                 const std::function<void(int, int, MessageReader&)>& unpack, const char* what);
 
   RunConfig config_;
   GasParticles gas_;
