@@ -136,7 +136,8 @@ with h5py.File('zero.hdf5', 'w') as f:
     # and MFB feedback with promotions. mpi_uneven_ranks: a 4 x 1 x 1 top-level grid on 3 ranks
     # (which do not divide it) and 5 (one owns no cell), with the owners chosen anew at every
     # recut (a repartition in the middle of the run), and cooling on, its snapshots and statistics
-    # gathered to rank 0 40 particles a message. The leak checker is off: Open MPI's
+    # gathered to rank 0 40 particles a message, and its recuts and exchanges in rounds of
+    # 20,000 bytes (about 60 particles, or a few cells). The leak checker is off: Open MPI's
     # own allocations outlive MPI_Finalize.
     mpirun_n() { ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$@"; }
     extra="" ranks="2 3 4"
@@ -151,6 +152,7 @@ with h5py.File('zero.hdf5', 'w') as f:
 domain:
   repartition_imbalance: 0
   repartition_min_steps: 0
+  message_bytes: 20000
 cooling:
   enabled: true
 output:

@@ -11,13 +11,6 @@
 
 namespace fountain {
 
-namespace {
-
-// The most bytes a round of the exchange after a graph carries to one rank (plus at most one
-// leaf's): the buffers, kept from step to step, stay this size whatever the boundary holds.
-constexpr std::size_t kHaloBytesPerRound = std::size_t{1} << 20;
-
-}  // namespace
 
 void Engine::exchange_with_ranks(const std::function<void(int, MessageWriter&)>& pack,
                                  const std::function<void(int, MessageReader&)>& unpack, const char* what) {
@@ -105,8 +98,9 @@ void Engine::exchange_leaves_in_rounds(const std::vector<int>& leaves, const std
       for (; k < leaves.size(); ++k) {
         const int c = leaves[k];
         if (!travels(c) || !mine(c)) continue;
-        // Whole leaves, at least one a round: a round ends past the bound, never inside a leaf.
-        if (to_ranks_.size() - before >= kHaloBytesPerRound) break;
+        // Whole leaves, at least one a round: a round ends past domain.message_bytes, never
+        // inside a leaf, so the buffers kept from step to step stay about that size.
+        if (to_ranks_.size() - before >= config_.message_bytes) break;
         pack(static_cast<int>(q), c, w);
       }
       left = left || k < leaves.size();

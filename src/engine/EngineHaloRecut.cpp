@@ -21,8 +21,8 @@ namespace {
 // array, so that a read of them fails at once rather than reading another leaf's.
 constexpr std::size_t kNotHeld = std::numeric_limits<std::size_t>::max() / 4;
 
-// The most particles a rank sends in one round of a recut's exchanges, to all ranks together.
-constexpr std::size_t kParticlesPerRound = 16384;
+// Bytes a particle takes in a recut's message: its fields, and at most this much beside them.
+constexpr std::size_t kParticleHeaderBytes = 16;
 
 }  // namespace
 
@@ -337,7 +337,14 @@ void Engine::send_gas_in_rounds(const std::vector<std::vector<std::size_t>>& to,
   const auto nranks = static_cast<std::size_t>(ranks_->size());
   // Every rank's counts to every rank: each knows how many particles arrive, and all how
   // many rounds there are.
-  const std::size_t per_rank = std::max<std::size_t>(1, kParticlesPerRound / std::max<std::size_t>(1, nranks - 1));
+  // At most domain.message_bytes to each rank a round (every particle packs to one size).
+  GasParticles one;
+  one.resize(1);
+  std::vector<char> probe;
+  MessageWriter probe_writer(probe);
+  const std::size_t zero = 0;
+  pack_gas_particles(probe_writer, one, std::span<const std::size_t>(&zero, 1));
+  const std::size_t per_rank = std::max<std::size_t>(1, config_.message_bytes / (probe.size() + kParticleHeaderBytes));
   std::vector<long long> sending(nranks, 0);
   for (std::size_t q = 0; q < nranks; ++q)
     if (static_cast<int>(q) != me) sending[q] = static_cast<long long>(to[q].size());
