@@ -180,6 +180,21 @@ void place(Particles& whole, Particles& part, const std::vector<std::uint64_t>& 
   });
 }
 
+// Appends a piece's particles (their restart fields; the others start at zero, as place's).
+template <class Particles>
+void append_restart_fields(Particles& whole, Particles& part) {
+  const std::size_t at = whole.size();
+  whole.resize(at + part.size());
+  std::vector<const void*> from;
+  for_each_restart_field(part, [&](const char*, auto& field) { from.push_back(&field); });
+  std::size_t f = 0;
+  for_each_restart_field(whole, [&](const char*, auto& field) {
+    using V = std::decay_t<decltype(field)>;
+    const V& src = *static_cast<const V*>(from[f++]);
+    std::copy(src.begin(), src.end(), field.begin() + static_cast<std::ptrdiff_t>(at));
+  });
+}
+
 }  // namespace
 
 void write_restart(const std::string& path, const RestartState& s) {
@@ -255,7 +270,7 @@ void remove_stale_restart_pieces(const std::string& path) {
 
 namespace {
 RestartState read_restart_set(const hdf5::File& f, const std::string& path, RestartState s, std::uint64_t n_gas,
-                              std::uint64_t n_dm) {
+                              std::uint64_t n_dm, const RestartShare& share) {
   if (!f.has_attribute("/Restart", "Serial"))
     throw InputError(fmt::format("{}: /Restart has no attribute Serial (restart file incomplete)", path));
   s.serial = f.read_attribute_int64("/Restart", "Serial").at(0);
@@ -263,11 +278,22 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");
   if (stored != master_checksum(s, n_gas, n_dm, s.serial, names))
     throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
-  s.gas.resize(n_gas);
-  s.dm.resize(n_dm);
-  std::vector<char> gas_filled(n_gas, 0), dm_filled(n_dm, 0);
+  const bool shared = share.ranks > 1;
+  if (shared && n_dm > 0)
+    throw InputError(fmt::format("{}: holds {} collisionless particles, which a run without gravity cannot have", path,
+                                 n_dm));
+  s.gas_total = n_gas;
+  s.gas_shared = shared;
+  if (!shared) {
+    s.gas.resize(n_gas);
+    s.dm.resize(n_dm);
+  }
+  std::vector<char> gas_filled(shared ? 0 : n_gas, 0), dm_filled(shared ? 0 : n_dm, 0);
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  for (const std::string& name : master_pieces(path)) {
+  const std::vector<std::string> pieces = master_pieces(path);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    if (shared && static_cast<int>(k % static_cast<std::size_t>(share.ranks)) != share.rank) continue;
+    const std::string& name = pieces[k];
     const std::string piece = (dir / name).string();
     if (!std::filesystem::exists(piece))
       throw InputError(fmt::format("{}: restart piece {} named by {} is missing", piece, name, path));
@@ -288,9 +314,18 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
     const std::string stored = pf.read_attribute_string("/Piece", "Checksum");
     if (stored != piece_checksum(p))
       throw InputError(fmt::format("{}: restart piece is corrupted (checksum {} does not match its contents)", piece, stored));
+    if (shared) {
+      for (std::uint64_t i : p.gas_index)
+        if (i >= n_gas) throw InputError(fmt::format("{}: holds the place {} of a run of {} gas particles", piece, i, n_gas));
+      if (p.dm.size() > 0) throw InputError(fmt::format("{}: holds collisionless particles the master does not count", piece));
+      append_restart_fields(s.gas, p.gas);
+      s.gas_places.insert(s.gas_places.end(), p.gas_index.begin(), p.gas_index.end());
+      continue;
+    }
     place(s.gas, p.gas, p.gas_index, gas_filled, piece, "gas");
     place(s.dm, p.dm, p.dm_index, dm_filled, piece, "collisionless");
   }
+  if (shared) return s;
   const auto missing = [](const std::vector<char>& v) { return std::count(v.begin(), v.end(), 0); };
   if (missing(gas_filled) > 0 || missing(dm_filled) > 0)
     throw InputError(fmt::format("{}: its pieces hold {} of {} gas and {} of {} collisionless particles", path,
@@ -300,7 +335,9 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
 }
 }  // namespace
 
-RestartState read_restart(const std::string& path) {
+RestartState read_restart(const std::string& path) { return read_restart(path, RestartShare{}); }
+
+RestartState read_restart(const std::string& path, const RestartShare& share) {
   if (!std::filesystem::exists(path)) throw InputError(fmt::format("{}: no such restart file", path));
   if (!hdf5::is_hdf5(path)) throw InputError(fmt::format("{}: not a restart file (not HDF5, or truncated)", path));
   hdf5::File f(path, hdf5::File::Mode::read);
@@ -329,7 +366,8 @@ RestartState read_restart(const std::string& path) {
   if (s.parameters_yaml == "{}") s.parameters_yaml.clear();
   const std::uint64_t n_gas = f.read_attribute_uint64("/Restart", "GasParticles").at(0);
   const std::uint64_t n_dm = f.read_attribute_uint64("/Restart", "CollisionlessParticles").at(0);
-  if (f.exists("/Restart/Pieces")) return read_restart_set(f, path, std::move(s), n_gas, n_dm);
+  if (f.exists("/Restart/Pieces")) return read_restart_set(f, path, std::move(s), n_gas, n_dm, share);
+  s.gas_total = n_gas;
   s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
   s.dm = read_particles<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, "collisionless");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");

@@ -37,6 +37,12 @@ struct RestartState {
   star_formation::StarFormationTally star_formation;  // since the start
   std::string parameters_yaml;  // the parameters the run was started with
   long long serial = 0;  // of the last piece set written (0: none), for the next set's names
+  // Read as a share of a set (RestartShare): `gas` holds some pieces' particles, gas_places
+  // each one's place in the run, of gas_total in all. Read whole: gas_places is empty and
+  // gas_total is gas.size().
+  bool gas_shared = false;
+  std::vector<std::uint64_t> gas_places;
+  std::uint64_t gas_total = 0;
 };
 
 // Writes atomically (temporary file, then rename). Every field of the gas (/Gas) and of the
@@ -69,5 +75,15 @@ void remove_stale_restart_pieces(const std::string& path);
 // with the stored particle count, a checksum that does not match (a corrupted file), or
 // pieces that do not fill the run's particles exactly once, throws InputError naming the file.
 RestartState read_restart(const std::string& path);
+
+// Across ranks that hold shares of the gas (runs without gravity or collisionless particles):
+// rank r of R reads the pieces p of a set with p % R == r, with their places, each piece's
+// checksum checked. Whether the pieces fill the run's particles exactly once is for the
+// ranks to check together. A file written whole (by one rank) is read whole; a set holding
+// collisionless particles is refused.
+struct RestartShare {
+  int rank = 0, ranks = 1;
+};
+RestartState read_restart(const std::string& path, const RestartShare& share);
 
 }  // namespace fountain::io

@@ -279,6 +279,20 @@ with h5py.File('good.hdf5', 'r') as f:
     # A later set replaced the first: still two pieces, and those the master names.
     pieces=$(ls outB | grep -c '^restart_[0-9]*_rank[0-9]*\.hdf5$' || true)
     [ "$pieces" -eq 2 ] || { ls outB; fail "stale restart pieces left: $pieces" ; }
+    # On 2 ranks each reads only its pieces: a set whose pieces do not fill the run (the second
+    # a copy of the first, checksum and all) is still refused, with how much they hold.
+    cp -r outB outBdup
+    first_piece=$(ls outBdup/restart_*_rank0.hdf5)
+    cp "$first_piece" "$(ls outBdup/restart_*_rank1.hdf5)"
+    sed "s|directory: outB|directory: outBdup|" params_mpi_killed.yml > params_mpi_dup.yml
+    set +e
+    ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params_mpi_dup.yml --restart \
+      > dup.txt 2>&1
+    status=$?
+    set -e
+    [ "$status" -ne 0 ] || { cat dup.txt; fail "a set with a repeated piece was restarted"; }
+    grep -q "restart.hdf5: its pieces hold [0-9]* of [0-9]* gas" dup.txt || { cat dup.txt; fail "no message on the repeated piece"; }
+    echo "ok: $(grep -m1 'its pieces hold' dup.txt)"
     # On 1 rank the run writes one whole file again, and the 3-rank copy's set was replaced.
     [ "$(ls outB1 | grep -c '_rank' || true)" -eq 0 ] || { ls outB1; fail "pieces left beside a 1-rank restart file"; } ;;
   comoving_music_yt|comoving_music_bitwise|comoving_music_restart)

@@ -1091,6 +1091,46 @@ TEST_F(IoTest, RestartSetOfPiecesReadsBackAsTheWholeStateBitwise) {
   EXPECT_EQ(fountain::io::read_restart(path).serial, 4);
 }
 
+// Ranks that hold shares read some of a set's pieces each (rank r of R: the pieces p with
+// p % R == r), with each particle's place: together, every particle once, bit for bit the
+// whole read's. A file written whole is read whole, and a set with collisionless particles is
+// refused.
+TEST_F(IoTest, RestartSetReadInSharesGivesEachParticleOnceWithItsPlace) {
+  const auto s = restart_state(17, 0);
+  const std::string path = file("restart.hdf5");
+  write_as_set(s, path, 3);
+  const auto whole = fountain::io::read_restart(path);
+  for (int ranks : {2, 3}) {
+    std::vector<int> seen(s.gas.size(), 0);
+    for (int r = 0; r < ranks; ++r) {
+      const auto share = fountain::io::read_restart(path, {r, ranks});
+      EXPECT_TRUE(share.gas_shared);
+      EXPECT_EQ(share.gas_total, s.gas.size());
+      EXPECT_EQ(share.steps, s.steps);
+      ASSERT_EQ(share.gas_places.size(), share.gas.size());
+      EXPECT_EQ(share.gas.size() == 0, r >= 2) << "rank " << r << " of " << ranks;
+      for (std::size_t i = 0; i < share.gas.size(); ++i) {
+        const std::size_t p = share.gas_places[i];
+        ASSERT_LT(p, s.gas.size());
+        ++seen[p];
+        EXPECT_EQ(share.gas.id[i], whole.gas.id[p]);
+        EXPECT_TRUE(same_bits(std::vector<Vec3>{share.gas.x[i]}, std::vector<Vec3>{whole.gas.x[p]}));
+        EXPECT_TRUE(same_bits(std::vector<double>{share.gas.potential[i]}, std::vector<double>{whole.gas.potential[p]}));
+        EXPECT_EQ(share.gas.ti_begin[i], whole.gas.ti_begin[p]);
+      }
+    }
+    for (int count : seen) EXPECT_EQ(count, 1);
+  }
+  const std::string single = file("single.hdf5");
+  fountain::io::write_restart(single, s);
+  const auto alone = fountain::io::read_restart(single, {1, 2});
+  EXPECT_FALSE(alone.gas_shared);
+  EXPECT_EQ(alone.gas.size(), s.gas.size());
+  const std::string with_dm = file("with_dm.hdf5");
+  write_as_set(restart_state(17, 5), with_dm, 1);
+  EXPECT_THROW(fountain::io::read_restart(with_dm, {0, 2}), InputError);
+}
+
 TEST_F(IoTest, RestartSetWithAMissingOrCorruptedPieceIsRefusedByName) {
   const auto s = restart_state(17, 29);
   const std::string path = file("restart.hdf5");

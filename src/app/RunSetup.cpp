@@ -168,6 +168,41 @@ void check_fits_periodic_box(const io::InitialConditions& ic, const std::string&
                                        xs == &ic.gas.x ? ic.gas.id[i] : ic.dm.id[i]));
 }
 
+// The pieces of a restart set the ranks read hold, together, each of the run's places once:
+// each place is counted by the rank whose range holds it (rank q: [n q / R, n (q + 1) / R)).
+void check_pieces_fill_the_run(const io::RestartState& state, const std::string& path,
+                               const domain::RankExchange& ranks) {
+  const std::uint64_t n = state.gas_total;
+  const auto nranks = static_cast<std::uint64_t>(ranks.size());
+  auto first_of = [&](std::uint64_t q) { return (q * n + nranks - 1) / nranks; };
+  std::vector<domain::RankExchange::Buffer> to(nranks);
+  std::vector<std::uint64_t> mine;
+  for (std::uint64_t p : state.gas_places) {
+    std::uint64_t q = p * nranks / n;
+    while (q + 1 < nranks && first_of(q + 1) <= p) ++q;
+    while (q > 0 && first_of(q) > p) --q;
+    if (static_cast<int>(q) == ranks.rank()) {
+      mine.push_back(p);
+    } else {
+      const auto* bytes = reinterpret_cast<const char*>(&p);
+      to[q].insert(to[q].end(), bytes, bytes + sizeof p);
+    }
+  }
+  for (const auto& in : ranks.alltoall(to)) {
+    const std::size_t at = mine.size();
+    mine.resize(at + in.size() / sizeof(std::uint64_t));
+    if (!in.empty()) std::memcpy(mine.data() + at, in.data(), in.size());
+  }
+  const std::uint64_t first = first_of(static_cast<std::uint64_t>(ranks.rank()));
+  std::vector<char> seen(first_of(static_cast<std::uint64_t>(ranks.rank()) + 1) - first, 0);
+  long long once = 0;
+  for (std::uint64_t p : mine)
+    if (p - first < seen.size() && !seen[p - first]) seen[p - first] = 1, ++once;
+  const auto filled = static_cast<std::uint64_t>(ranks.sum(once));
+  if (filled != n)
+    throw InputError(fmt::format("{}: its pieces hold {} of {} gas and 0 of 0 collisionless particles", path, filled, n));
+}
+
 // A restart must continue the same problem: every parameter must match but the threads
 // and their pinning, the output directory (a run folder may be moved or copied and
 // continued) and the task-graph and timeline dumps (diagnostics: a slow run may be resumed
@@ -208,17 +243,17 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
   }
   io::IcReadOptions read_options;
   read_options.cosmological = config.comoving.enabled;
-  // Across ranks that each hold their own particles, each reads a share of the gas (a restart
-  // reads its files whole, as before).
+  // Across ranks that each hold their own particles, each reads a share of the gas, and of a
+  // restart set some of its pieces.
   std::unique_ptr<domain::RankExchange> ranks;
-  if (options.ranks > 1 && config.ranks_hold_shares() && !options.restart) {
+  if (options.ranks > 1 && config.ranks_hold_shares()) {
     ranks = domain::RankExchange::world();
     if (!ranks) throw std::logic_error("a run of several ranks found no ranks");
     read_options.share_rank = ranks->rank();
     read_options.share_ranks = ranks->size();
   }
   start.ic = io::read_initial_conditions(ic_path, read_options);
-  if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total};
+  if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}};
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.
   if (config.comoving.enabled) {
@@ -234,8 +269,15 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
   check_distinct_positions(ic, config.space.periodic, ic_path, ranks.get());
   if (options.restart) {
     io::RestartState& state = start.restart;
-    state = io::read_restart(restart_path(params));
+    state = ranks ? io::read_restart(restart_path(params), io::RestartShare{ranks->rank(), ranks->size()})
+                  : io::read_restart(restart_path(params));
     check_same_parameters(state, params, restart_path(params));
+    // A set is read in shares of its pieces, a file written by one rank whole.
+    start.share.reset();
+    if (state.gas_shared) {
+      check_pieces_fill_the_run(state, restart_path(params), *ranks);
+      start.share = Engine::GasShare{0, state.gas_total, std::move(state.gas_places)};
+    }
     const std::size_t state_dm = state.dm.size() - state.dm.count(Species::Star);
     if (state_dm != ic.dm.size())
       throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "

@@ -57,7 +57,7 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   const auto t_start = std::chrono::steady_clock::now();
   RunStart start = prepare_run(params, options);
   const RunConfig& config = start.config;
-  Engine engine(config, std::move(start.ic.gas), std::move(start.ic.dm), start.share);
+  Engine engine(config, std::move(start.ic.gas), std::move(start.ic.dm), std::move(start.share));
   // Rank 0 alone writes files and reports.
   const bool io_rank = engine.rank() == 0;
   const bool quiet = options.quiet || !io_rank;

@@ -57,6 +57,9 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   gas_total_ = share ? share->total : gas_.size();
   holds_read_share_ = share.has_value();
   share_first_ = share ? share->first : 0;
+  if (share) share_places_ = std::move(share->places);
+  if (!share_places_.empty() && share_places_.size() != gas_.size())
+    throw std::logic_error(fmt::format("a share of {} particles with {} places", gas_.size(), share_places_.size()));
   // Dark matter alone (a collisionless cosmological run) needs gravity; nothing at all is no run.
   if (gas_total_ == 0 && (dm_.size() == 0 || !config_.gravity.enabled)) throw InputError("no gas particles to simulate");
   if (dm_.size() > 0 && !config_.gravity.enabled)

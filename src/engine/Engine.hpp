@@ -62,9 +62,11 @@ struct StepInfo {
 class Engine {
  public:
   // The gas one rank read of a run across ranks that hold shares (RunConfig::ranks_hold_shares):
-  // the file's rows [first, first + gas.size()) of `total`.
+  // the file's rows [first, first + gas.size()) of `total`, or (a restart set's pieces) the
+  // places in the run given one by one.
   struct GasShare {
     std::size_t first = 0, total = 0;
+    std::vector<std::uint64_t> places;  // empty: first, first + 1, ...
   };
   // Without `share`, the gas is every particle of the run.
   Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm = {},
@@ -368,6 +370,7 @@ class Engine {
   // from the run's place share_first_ on (the file's order, in which one rank recuts them).
   bool holds_read_share_ = false;
   std::size_t share_first_ = 0;
+  std::vector<std::uint64_t> share_places_;  // a restart's share: each particle's place
   std::vector<std::byte> permute_scratch_;  // halo mode's recut: one buffer, kept from one to the next
   // What a halo-mode recut hands on to hold_leaves.
   struct HaloRecut {

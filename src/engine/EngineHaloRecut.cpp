@@ -32,8 +32,9 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
   HaloRecut& r = halo_recut_;
   // Every particle this rank holds (all current) with its place in the run's order, and which
   // it owns. At the first recut of a run each rank holds the share of the file it read, in
-  // the file's order, and owns it. At the first recut of a restart every rank holds every
-  // particle, as read, and takes all as its own: all then find the same box, counts and
+  // the file's order (or the pieces of a restart set it read, with their places), and owns
+  // it. At the first recut of a restart from one file every rank holds every particle, as
+  // read, and takes all as its own: all then find the same box, counts and
   // owners without a word, and none need be sent. Until this rank's arrays are made anew
   // (hold_leaves) they keep every copy: the holders of a new leaf then need only be told
   // which particles it holds.
@@ -48,7 +49,11 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
   if (first_recut) {
     own.resize(gas_.size());
     std::iota(own.begin(), own.end(), std::size_t{0});
-    std::iota(r.place.begin(), r.place.end(), std::uint64_t{share_first_});
+    if (share_places_.empty()) {
+      std::iota(r.place.begin(), r.place.end(), std::uint64_t{share_first_});
+    } else {
+      r.place = share_places_;
+    }
     if (r.from_shares) r.source.assign(gas_.size(), me);
   } else {
     const std::vector<int> leaves = leaves_in_run_order();
@@ -326,6 +331,7 @@ void Engine::hold_leaves() {
   // After the first recut the arrays hold less than they did: the room for the rest goes.
   if (r.everyone || r.from_shares) gas_.for_each_field([](auto& field) { field.shrink_to_fit(); });
   holds_read_share_ = false;
+  std::vector<std::uint64_t>().swap(share_places_);
   for (std::size_t c = 0; c < local_first.size(); ++c) space_.cell(static_cast<int>(c)).first = local_first[c];
   halo_recut_ = {};
 }
