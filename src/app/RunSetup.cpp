@@ -113,7 +113,7 @@ void check_distinct_positions(const io::InitialConditions& ic, bool periodic, co
     std::uint64_t found = 0, same = 0;
     Placed a, b;
   };
-  Coincidence first;
+  Coincidence first{};
   for (std::size_t k = 1; k < pool.size() && !first.found; ++k) {
     if (pool[k].x != pool[k - 1].x) continue;
     first = {1, 2, pool[k - 1], pool[k]};
