@@ -159,6 +159,18 @@ std::string piece_checksum(const RestartPiece& p) {
   return c.hex();
 }
 
+// copy(to, from) for each restart field of `whole` and the same field of `part`.
+template <class Particles, class Copy>
+void copy_restart_fields(Particles& whole, Particles& part, Copy&& copy) {
+  std::vector<const void*> fields;
+  for_each_restart_field(part, [&](const char*, auto& field) { fields.push_back(&field); });
+  std::size_t f = 0;
+  for_each_restart_field(whole, [&](const char*, auto& field) {
+    using V = std::decay_t<decltype(field)>;
+    copy(field, *static_cast<const V*>(fields[f++]));
+  });
+}
+
 // Puts each particle of `part` at its index in `whole`, field by field; `filled` counts.
 template <class Particles>
 void place(Particles& whole, Particles& part, const std::vector<std::uint64_t>& index, std::vector<char>& filled,
@@ -170,13 +182,8 @@ void place(Particles& whole, Particles& part, const std::vector<std::uint64_t>& 
     if (filled[index[k]]) throw InputError(fmt::format("{}: {} particle {} is also in another piece", piece, noun, index[k]));
     filled[index[k]] = 1;
   }
-  std::vector<const void*> from;
-  for_each_restart_field(part, [&](const char*, auto& field) { from.push_back(&field); });
-  std::size_t f = 0;
-  for_each_restart_field(whole, [&](const char*, auto& field) {
-    using V = std::decay_t<decltype(field)>;
-    const V& src = *static_cast<const V*>(from[f++]);
-    for (std::size_t k = 0; k < index.size(); ++k) field[index[k]] = src[k];
+  copy_restart_fields(whole, part, [&](auto& to, const auto& from) {
+    for (std::size_t k = 0; k < index.size(); ++k) to[index[k]] = from[k];
   });
 }
 
@@ -185,13 +192,8 @@ template <class Particles>
 void append_restart_fields(Particles& whole, Particles& part) {
   const std::size_t at = whole.size();
   whole.resize(at + part.size());
-  std::vector<const void*> from;
-  for_each_restart_field(part, [&](const char*, auto& field) { from.push_back(&field); });
-  std::size_t f = 0;
-  for_each_restart_field(whole, [&](const char*, auto& field) {
-    using V = std::decay_t<decltype(field)>;
-    const V& src = *static_cast<const V*>(from[f++]);
-    std::copy(src.begin(), src.end(), field.begin() + static_cast<std::ptrdiff_t>(at));
+  copy_restart_fields(whole, part, [&](auto& to, const auto& from) {
+    std::copy(from.begin(), from.end(), to.begin() + static_cast<std::ptrdiff_t>(at));
   });
 }
 
