@@ -21,6 +21,7 @@
 #include "app/Simulation.hpp"
 #include "core/Error.hpp"
 #include "core/PeriodicWrap.hpp"
+#include "domain/BoundsAcrossRanks.hpp"
 #include "domain/RankExchange.hpp"
 #include "params/ParameterFile.hpp"
 
@@ -142,18 +143,13 @@ void check_fits_periodic_box(const io::InitialConditions& ic, const std::string&
   if (!(ic.box_size.x > 0 && ic.box_size.y > 0 && ic.box_size.z > 0))
     throw InputError(fmt::format("{}: periodic run needs a positive /Header/BoxSize", path));
   constexpr double kSlack = 1.1;
-  std::array<double, 6> extent{1e300, 1e300, 1e300, 1e300, 1e300, 1e300};  // lo, then -hi
+  Vec3 low{1e300, 1e300, 1e300}, high{-1e300, -1e300, -1e300};
   for (const auto* xs : {&ic.gas.x, &ic.dm.x})
     for (const Vec3& p : *xs)
-      for (int k = 0; k < 3; ++k) {
-        extent[static_cast<std::size_t>(k)] = std::min(extent[static_cast<std::size_t>(k)], p[k]);
-        extent[static_cast<std::size_t>(k + 3)] = std::min(extent[static_cast<std::size_t>(k + 3)], -p[k]);
-      }
-  if (ranks)
-    for (const auto& theirs : ranks->allgather_values(std::span<const double>(extent), "extent of the particles"))
-      for (std::size_t j = 0; j < 6; ++j) extent[j] = std::min(extent[j], theirs[j]);
+      for (int k = 0; k < 3; ++k) low[k] = std::min(low[k], p[k]), high[k] = std::max(high[k], p[k]);
+  if (ranks) domain::widen_to_every_rank(*ranks, low, high, "extent of the particles");
   for (int k = 0; k < 3; ++k) {
-    const double lo = extent[static_cast<std::size_t>(k)], hi = -extent[static_cast<std::size_t>(k + 3)];
+    const double lo = low[k], hi = high[k];
     if (hi - lo > kSlack * ic.box_size[k])
       throw InputError(fmt::format("{}: the particles span {} along {} (from {} to {}), more than the periodic box's "
                                    "side /Header/BoxSize = {}: is BoxSize in the particles' units?",

@@ -16,6 +16,7 @@
 #include "cooling/CoolingLoop.hpp"
 #include "cooling/CoolingTasks.hpp"
 #include "feedback/FeedbackTasks.hpp"
+#include "domain/BoundsAcrossRanks.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
 #include "gravity/GravityLoop.hpp"
@@ -304,14 +305,7 @@ void Engine::guess_smoothing_lengths() {
     Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
     for (const auto& x : gas_.x)
       for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], x[k]), hi[k] = std::max(hi[k], x[k]);
-    if (holds_read_share_) {
-      const std::array<double, 6> mine{lo.x, lo.y, lo.z, -hi.x, -hi.y, -hi.z};
-      for (const auto& b : ranks_->allgather_values(std::span<const double>(mine), "extent of the gas"))
-        for (int k = 0; k < 3; ++k) {
-          lo[k] = std::min(lo[k], b[static_cast<std::size_t>(k)]);
-          hi[k] = std::max(hi[k], -b[static_cast<std::size_t>(k + 3)]);
-        }
-    }
+    if (holds_read_share_) domain::widen_to_every_rank(*ranks_, lo, hi, "extent of the gas");
     Vec3 ext = config_.space.periodic ? config_.space.box_size : hi - lo;
     const double longest = std::max({ext.x, ext.y, ext.z});
     for (int k = 0; k < 3; ++k) ext[k] = std::max(ext[k], 1e-3 * longest);

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "core/PeriodicWrap.hpp"
+#include "domain/BoundsAcrossRanks.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
 #include "engine/Engine.hpp"
@@ -80,15 +81,7 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
         lo[k] = std::min(lo[k], gas_.x[i][k]);
         hi[k] = std::max(hi[k], gas_.x[i][k]);
       }
-    if (!r.everyone) {
-      const std::array<double, 6> bounds{lo.x, lo.y, lo.z, -hi.x, -hi.y, -hi.z};
-      const auto all = ranks_->allgather_values(std::span<const double>(bounds), "box bounds");
-      for (const auto& b : all)
-        for (int k = 0; k < 3; ++k) {
-          lo[k] = std::min(lo[k], b[static_cast<std::size_t>(k)]);
-          hi[k] = std::max(hi[k], -b[static_cast<std::size_t>(k + 3)]);
-        }
-    }
+    if (!r.everyone) domain::widen_to_every_rank(*ranks_, lo, hi, "box bounds");
   }
   gas_total_ = r.everyone ? own.size() : static_cast<std::size_t>(ranks_->sum(static_cast<long long>(own.size())));
   space_.set_frame(lo, hi, gas_total_, 0);
