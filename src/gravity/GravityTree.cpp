@@ -10,11 +10,6 @@ namespace fountain::gravity {
 
 namespace {
 
-// Below this depth a node's side is still far above a double's resolution of any sane
-// coordinate; deeper nodes are kept as (over-full) leaves, so coincident particles end the
-// recursion instead of looping forever.
-constexpr int kMaxDepth = 48;
-
 // The traceless quadrupole of a point mass m at offset d: m (3 d d^T - |d|^2 I).
 void add_point_quadrupole(std::array<double, 6>& q, double m, const Vec3& d) {
   const double d2 = dot(d, d);
@@ -24,10 +19,6 @@ void add_point_quadrupole(std::array<double, 6>& q, double m, const Vec3& d) {
   q[3] += m * 3.0 * d.x * d.y;
   q[4] += m * 3.0 * d.x * d.z;
   q[5] += m * 3.0 * d.y * d.z;
-}
-
-int octant(const Vec3& x, const Vec3& centre) {
-  return (x.x >= centre.x ? 1 : 0) | (x.y >= centre.y ? 2 : 0) | (x.z >= centre.z ? 4 : 0);
 }
 
 double farthest(const Vec3& d) { return std::max({std::fabs(d.x), std::fabs(d.y), std::fabs(d.z)}); }
@@ -53,31 +44,45 @@ void check_inputs(std::span<const Vec3> positions, std::span<const double> masse
 
 }  // namespace
 
+GravityTree::Cube GravityTree::root_cube(const Vec3& lo, const Vec3& hi) {
+  double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  // A hair of margin keeps particles on the upper faces inside the cube after rounding.
+  side = side > 0.0 ? side * (1.0 + 1e-9) : 1.0;
+  return {0.5 * (lo + hi), side};
+}
+
 GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double> masses,
                          std::span<const double> softenings, const TreeConfig& config)
     : config_(config) {
   check_inputs(positions, masses, softenings, config);
-  const auto n = static_cast<std::int32_t>(positions.size());
-  index_.resize(n);
-  if (n == 0) return;
-
+  if (positions.empty()) return;
   Vec3 lo = positions[0], hi = positions[0];
   for (const Vec3& x : positions)
     for (int d = 0; d < 3; ++d) {
       lo[d] = std::min(lo[d], x[d]);
       hi[d] = std::max(hi[d], x[d]);
     }
-  double side = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  // A hair of margin keeps particles on the upper faces inside the cube after rounding.
-  side = side > 0.0 ? side * (1.0 + 1e-9) : 1.0;
-  const Vec3 centre = 0.5 * (lo + hi);
-  length_unit_ = std::ldexp(1.0, std::ilogb(side));
+  build_from(positions, masses, softenings, root_cube(lo, hi), 0);
+}
+
+GravityTree::GravityTree(std::span<const Vec3> positions, std::span<const double> masses,
+                         std::span<const double> softenings, const TreeConfig& config, const Cube& cube, int depth)
+    : config_(config) {
+  check_inputs(positions, masses, softenings, config);
+  if (!positions.empty()) build_from(positions, masses, softenings, cube, depth);
+}
+
+void GravityTree::build_from(std::span<const Vec3> positions, std::span<const double> masses,
+                             std::span<const double> softenings, const Cube& cube, int depth) {
+  const auto n = static_cast<std::int32_t>(positions.size());
+  index_.resize(static_cast<std::size_t>(n));
+  length_unit_ = std::ldexp(1.0, std::ilogb(cube.side));
 
   // Partitioned with their positions beside their indices, so no pass reads through an index.
   std::vector<SortItem> items(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
   for (std::int32_t i = 0; i < n; ++i) items[static_cast<std::size_t>(i)] = {positions[i], i};
   nodes_.reserve(2 * static_cast<std::size_t>(n) / config_.max_leaf_size + 16);
-  build(0, n, centre, side, 0, items, scratch);
+  build(0, n, cube.centre, cube.side, depth, items, scratch);
   for (TreeNode& node : nodes_)
     if (node.next == static_cast<std::int32_t>(nodes_.size())) node.next = -1;
 
@@ -171,7 +176,13 @@ std::int64_t GravityTree::refit_group_count(int g) const {
   return count;
 }
 
+void GravityTree::check_refittable() const {
+  if (across_ranks_)
+    throw std::logic_error("GravityTree: a tree assembled across ranks is assembled anew, not refitted");
+}
+
 void GravityTree::finish_refit() {
+  check_refittable();
   bool loose = false;
   for (bool l : group_loose_) loose = loose || l;
   for (auto t = top_nodes_.rbegin(); t != top_nodes_.rend(); ++t) loose = node_moments(*t) || loose;
@@ -208,10 +219,7 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
     for (int o = 0; o < 8; ++o) {
       const std::int32_t child_count = start[o + 1] - start[o];
       if (child_count == 0) continue;
-      const Vec3 child_centre{centre.x + ((o & 1) ? 0.25 : -0.25) * side,
-                              centre.y + ((o & 2) ? 0.25 : -0.25) * side,
-                              centre.z + ((o & 4) ? 0.25 : -0.25) * side};
-      build(first + start[o], child_count, child_centre, child_side, depth + 1, items, scratch);
+      build(first + start[o], child_count, child_centre(centre, side, o), child_side, depth + 1, items, scratch);
     }
   }
   nodes_[self].next = static_cast<std::int32_t>(nodes_.size());

@@ -62,7 +62,10 @@ struct TreeNode {
   double min_softening = 0.0;  // smallest
   std::int32_t first = 0;      // the node's particles are [first, first + count) in tree order
   std::int32_t count = 0;
-  std::int32_t first_child = -1;  // -1 for a leaf; otherwise the next node in the array
+  // -1 for a leaf; otherwise the next node in the array. kPruned: another rank's node whose
+  // children and particles that rank did not send (TreeAcrossRanks), as no walk here opens it.
+  std::int32_t first_child = -1;
+  static constexpr std::int32_t kPruned = -2;
   std::int32_t next = -1;         // node to visit after this one's subtree; -1 ends the walk
   std::array<double, 6> quadrupole{};
   double second_moment = 0.0;  // sum m |x - com|^2: the trace the softened expansion needs
@@ -101,6 +104,7 @@ class GravityTree {
   };
   template <class Fetch>
   void refit_group(int g, const Fetch& fetch) {
+    check_refittable();
     bool loose = false;
     for (std::int32_t p = group_start_[static_cast<std::size_t>(g)]; p < group_start_[static_cast<std::size_t>(g) + 1]; ++p) {
       const std::int32_t root = pieces_[static_cast<std::size_t>(p)];
@@ -140,6 +144,38 @@ class GravityTree {
   const TreeConfig& config() const { return config_; }
 
  private:
+  // TreeAcrossRanks.cpp builds a rank's subtrees with these and assembles its tree from them.
+  friend class TreeAssembler;
+  struct Cube {
+    Vec3 centre;
+    double side = 0.0;
+  };
+  // The root cube GravityTree's constructor takes for these sources (their bounding box).
+  static Cube root_cube(const Vec3& lo, const Vec3& hi);
+  // The subtree that a tree of more sources holds at node `cube` of depth `depth`, when these
+  // are that node's sources, in the larger tree's order: the same nodes, in the same order,
+  // with the same moments, bit for bit.
+  GravityTree(std::span<const Vec3> positions, std::span<const double> masses, std::span<const double> softenings,
+              const TreeConfig& config, const Cube& cube, int depth);
+  explicit GravityTree(const TreeConfig& config) : config_(config) {}
+  void build_from(std::span<const Vec3> positions, std::span<const double> masses, std::span<const double> softenings,
+                  const Cube& cube, int depth);
+
+  // Below this depth a node's side is still far above a double's resolution of any sane
+  // coordinate; deeper nodes are kept as (over-full) leaves, so coincident particles end the
+  // recursion instead of looping forever.
+  static constexpr int kMaxDepth = 48;
+  // TreePM: a node of at most this many particles that the criterion opens gives its particles
+  // directly (docs/gravity.md, "Periodic TreePM").
+  static constexpr std::int32_t kDirectNodeSize = 32;
+  static int octant(const Vec3& x, const Vec3& centre) {
+    return (x.x >= centre.x ? 1 : 0) | (x.y >= centre.y ? 2 : 0) | (x.z >= centre.z ? 4 : 0);
+  }
+  static Vec3 child_centre(const Vec3& centre, double side, int o) {
+    return {centre.x + ((o & 1) ? 0.25 : -0.25) * side, centre.y + ((o & 2) ? 0.25 : -0.25) * side,
+            centre.z + ((o & 4) ? 0.25 : -0.25) * side};
+  }
+
   struct SortItem {
     Vec3 x;
     std::int32_t index;
@@ -162,6 +198,22 @@ class GravityTree {
 
   struct Group;
   struct InteractionList;
+  // What a walk does at a node (decide): passes it by (beyond the TreePM cut-off), takes its
+  // expansion, goes into its children, or lists its particles. `pruned`: it would go in, but
+  // the node's inside is not here.
+  enum class Visit { skip, accept, accept_softened, open, list, pruned };
+  struct WalkRules {
+    double theta2 = 0.0, cutoff = 0.0, slack = 0.0;
+    bool split = false, soft_allowed = false;
+  };
+  // The node's offsets from the group's centre, its gap to the group's box and the pair
+  // spline length, as decide() found them (the listing of particles reuses them).
+  struct NodeOffsets {
+    double ox = 0.0, oy = 0.0, oz = 0.0, d2box = 0.0, h = 0.0;
+  };
+  static WalkRules walk_rules(const WalkConfig& config, const TreeNode& root);
+  Visit decide(const TreeNode& node, const Group& g, const WalkConfig& config, const WalkRules& rules,
+               NodeOffsets& o) const;
   void walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const;
   void evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const;
   // Squared distance from a point's nearest image to the group's box (0 inside it).
@@ -193,6 +245,8 @@ class GravityTree {
   std::array<std::int32_t, kRefitGroups + 1> group_start_{};
   std::array<bool, kRefitGroups> group_loose_{};
   bool loose_ = false;
+  bool across_ranks_ = false;  // assembled from several ranks' parts: rebuilt, never refitted
+  void check_refittable() const;
 };
 
 }  // namespace fountain::gravity

@@ -7,6 +7,7 @@
 #include <memory>
 #include <numeric>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "core/VectorClones.hpp"
@@ -16,9 +17,6 @@
 namespace fountain::gravity {
 
 namespace {
-// The gap between the group's box and a point or a cube, per axis.
-inline double gap(double offset, double reach) { return std::max(std::fabs(offset) - reach, 0.0); }
-
 // An opened leaf whose cube lies wholly within the group's largest target spline length of
 // its box has only near particles; one whose cube is wholly beyond every pair's spline length (h, the
 // largest of the group's and the leaf's) only far ones. Either way each particle's own test
@@ -35,16 +33,6 @@ inline Bulk classify_leaf(const Vec3& box_half, double h_max, const TreeNode& le
 }
 }  // namespace
 
-// The widest a node within the softening may be against its distance (side / distance from
-// the box to its centre of mass). The relative criterion alone admits light nodes seen under
-// any angle (error ~ alpha |a_old| each); outside the softening such nodes are few, inside
-// it, in a collapsed disc's halo, they were the largest errors (1.4e-2 on the softened-disc
-// test, 4.8e-3 with this cap, as without softened nodes at all; docs/gravity.md).
-constexpr double kSoftenedNodeAngle = 0.5;
-
-// TreePM: a node of at most this many particles that the criterion opens gives its particles
-// directly (docs/gravity.md, "Periodic TreePM").
-constexpr std::int32_t kDirectNodeSize = 32;
 
 inline double GravityTree::box_distance2(const Group& g, const Vec3& x) const {
   const double px = gap(image(x.x - g.centre.x), g.half.x), py = gap(image(x.y - g.centre.y), g.half.y),
@@ -52,22 +40,14 @@ inline double GravityTree::box_distance2(const Group& g, const Vec3& x) const {
   return px * px + py * py + pz * pz;
 }
 
-// Every test is the one-target test applied to the nearest point of the group's box, so a
-// group of one decides exactly as a single target would, and each target of a larger group
-// meets every criterion at least as strictly as it would alone.
 void GravityTree::walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const {
   list.clear();
-  const double theta2 = config.theta * config.theta;
-  const double cutoff = config.split.cutoff_radius();
-  const bool soft_allowed =
-      config.softened_nodes && config.expansion == MultipoleOrder::quadrupole && !config.split.enabled();
-  // Above the rounding of any gap computed inside the root cube.
-  const double slack = 1e-12 * (nodes_[0].side + std::fabs(nodes_[0].centre.x) + std::fabs(nodes_[0].centre.y) +
-                                std::fabs(nodes_[0].centre.z));
+  const WalkRules rules = walk_rules(config, nodes_[0]);
+  const double cutoff = rules.cutoff, slack = rules.slack;
   // Each of a node's particles, tested alone: written to both lists' ends and kept by advancing
   // one end or neither, without branches (in TreePM about half the particles of an opened node
   // lie beyond the cut-off, a branch no predictor learns).
-  const double cutoff2 = config.split.enabled() ? cutoff * cutoff : std::numeric_limits<double>::infinity();
+  const double cutoff2 = rules.split ? cutoff * cutoff : std::numeric_limits<double>::infinity();
   auto add_particles = [&](const TreeNode& node) {
     std::size_t f = list.far.size(), m = list.near.size();
     list.far.resize(f + static_cast<std::size_t>(node.count));
@@ -94,76 +74,52 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
     std::iota(to.begin() + static_cast<std::ptrdiff_t>(at), to.end(), node.first);
   };
   std::int32_t n = 0;
+  NodeOffsets o;
   while (n >= 0) {
     const TreeNode& node = nodes_[n];
-    const double half = 0.5 * node.side;
-    const double ox = image(node.centre.x - g.centre.x), oy = image(node.centre.y - g.centre.y),
-                 oz = image(node.centre.z - g.centre.z);
-    const double gx = gap(ox, half + g.half.x), gy = gap(oy, half + g.half.y), gz = gap(oz, half + g.half.z);
-    const double d2box = gx * gx + gy * gy + gz * gz;
-    // GADGET-2's safety check: a target within the cube grown by 10% per side opens it.
-    const double grown = 0.6 * node.side;
-    const bool inside_enlarged = std::fabs(ox) < grown + g.half.x && std::fabs(oy) < grown + g.half.y &&
-                                 std::fabs(oz) < grown + g.half.z;
-    const double h = std::max(g.h_max, spline_length(node.max_softening));
-    if (config.split.enabled() && d2box > cutoff * cutoff) {
-      n = node.next;  // beyond the short-range force: the mesh has it
-      continue;
-    }
-    // A node beyond every pair's spline length from the whole box takes the Newtonian
-    // expansion; one within it (softened_nodes) the softened one, judged by the same criterion
-    // (the softened field's derivatives are no larger than the Newtonian ones at the same
-    // distance, so the criterion bounds its neglected terms at least as well), but only when
-    // it is also seen under a small angle (kSoftenedNodeAngle) and every target pairs with all
-    // its particles at one spline length per target: the node's softenings are all alike, or
-    // no larger than any target's.
-    const bool beyond = d2box >= h * h;
-    bool accept = false;
-    if (!inside_enlarged && (beyond || soft_allowed)) {
-      const double cx = gap(image(node.com.x - g.centre.x), g.half.x), cy = gap(image(node.com.y - g.centre.y), g.half.y),
-                   cz = gap(image(node.com.z - g.centre.z), g.half.z);
-      const double r2 = cx * cx + cy * cy + cz * cz;
-      const double l2 = node.side * node.side;
-      if (!g.relative) {
-        accept = l2 <= theta2 * r2;
-      } else if (config.criterion == OpeningCriterion::gadget2_monopole) {
-        accept = config.G * node.mass * l2 <= g.a_crit * r2 * r2;  // G M l^2 / r^4 <= alpha |a_old|
-      } else {
-        accept = config.G * node.mass * l2 * node.side <= g.a_crit * r2 * r2 * std::sqrt(r2);  // G M l^3 / r^5
-      }
-      if (accept && !beyond)
-        accept = l2 <= kSoftenedNodeAngle * kSoftenedNodeAngle * r2 &&
-                 (node.min_softening == node.max_softening || g.h_min >= spline_length(node.max_softening));
-    }
-    if (accept) {
-      (beyond ? list.nodes : list.soft_nodes).push_back(n);
-      n = node.next;
-    } else if (node.first_child >= 0 && !(config.split.enabled() && node.count <= kDirectNodeSize)) {
-      n = node.first_child;
-    } else if (config.split.enabled()) {
-      // TreePM: a leaf, or a small node (the short range at high redshift opens nearly every
-      // node within the cut-off down to its leaves; its particles are listed at once, each
-      // exact). A node whose farthest point lies within the cut-off of the box, and which is
-      // wholly near or wholly far, is listed whole; otherwise each particle is tested.
-      const double half = 0.5 * node.side;
-      // The farthest a point of the node's cube lies from the box, per axis.
-      const double fx = gap(ox, g.half.x - half), fy = gap(oy, g.half.y - half), fz = gap(oz, g.half.z - half);
-      const double reach2 = fx * fx + fy * fy + fz * fz;
-      const Bulk bulk = std::sqrt(reach2) + slack <= cutoff
-                            ? classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack)
-                            : Bulk::mixed;
-      if (bulk != Bulk::mixed)
-        add_whole(node, bulk);
-      else
-        add_particles(node);
-      n = node.next;
-    } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, ox, oy, oz, d2box, h, slack); bulk != Bulk::mixed) {
-      // Decided for the whole leaf, so its particles need no test of their own.
-      add_whole(node, bulk);
-      n = node.next;
-    } else {
-      add_particles(node);
-      n = node.next;
+    switch (decide(node, g, config, rules, o)) {
+      case Visit::skip:
+        n = node.next;
+        break;
+      case Visit::accept:
+        list.nodes.push_back(n);
+        n = node.next;
+        break;
+      case Visit::accept_softened:
+        list.soft_nodes.push_back(n);
+        n = node.next;
+        break;
+      case Visit::open:
+        n = node.first_child;
+        break;
+      case Visit::pruned:
+        throw std::logic_error("GravityTree: a walk opened node " + std::to_string(n) +
+                               ", whose inside the rank that holds it did not send for this walk's targets");
+      case Visit::list:
+        if (rules.split) {
+          // A leaf, or a small node, listed at once: whole where its farthest point lies within
+          // the cut-off of the box and it is wholly near or wholly far; otherwise each particle
+          // is tested.
+          const double half = 0.5 * node.side;
+          // The farthest a point of the node's cube lies from the box, per axis.
+          const double fx = gap(o.ox, g.half.x - half), fy = gap(o.oy, g.half.y - half), fz = gap(o.oz, g.half.z - half);
+          const double reach2 = fx * fx + fy * fy + fz * fz;
+          const Bulk bulk = std::sqrt(reach2) + slack <= cutoff
+                                ? classify_leaf(g.half, g.h_max, node, o.ox, o.oy, o.oz, o.d2box, o.h, slack)
+                                : Bulk::mixed;
+          if (bulk != Bulk::mixed)
+            add_whole(node, bulk);
+          else
+            add_particles(node);
+        } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, o.ox, o.oy, o.oz, o.d2box, o.h, slack);
+                   bulk != Bulk::mixed) {
+          // Decided for the whole leaf, so its particles need no test of their own.
+          add_whole(node, bulk);
+        } else {
+          add_particles(node);
+        }
+        n = node.next;
+        break;
     }
   }
 }

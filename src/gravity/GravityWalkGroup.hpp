@@ -124,4 +124,77 @@ struct ShortRangeSplit {
         u_cut(static_cast<float>(split.cutoff_radius() / (2.0 * split.r_s))) {}
 };
 
+// The gap between the group's box and a point or a cube, per axis.
+inline double gap(double offset, double reach) { return std::max(std::fabs(offset) - reach, 0.0); }
+
+// The widest a node within the softening may be against its distance (side / distance from
+// the box to its centre of mass). The relative criterion alone admits light nodes seen under
+// any angle (error ~ alpha |a_old| each); outside the softening such nodes are few, inside
+// it, in a collapsed disc's halo, they were the largest errors (1.4e-2 on the softened-disc
+// test, 4.8e-3 with this cap, as without softened nodes at all; docs/gravity.md).
+constexpr double kSoftenedNodeAngle = 0.5;
+
+inline GravityTree::WalkRules GravityTree::walk_rules(const WalkConfig& config, const TreeNode& root) {
+  WalkRules r;
+  r.theta2 = config.theta * config.theta;
+  r.split = config.split.enabled();
+  r.cutoff = config.split.cutoff_radius();
+  r.soft_allowed = config.softened_nodes && config.expansion == MultipoleOrder::quadrupole && !r.split;
+  // Above the rounding of any gap computed inside the root cube.
+  r.slack = 1e-12 * (root.side + std::fabs(root.centre.x) + std::fabs(root.centre.y) + std::fabs(root.centre.z));
+  return r;
+}
+
+// Every test is the one-target test applied to the nearest point of the group's box, so a
+// group of one decides exactly as a single target would, and each target of a larger group
+// meets every criterion at least as strictly as it would alone.
+inline GravityTree::Visit GravityTree::decide(const TreeNode& node, const Group& g, const WalkConfig& config,
+                                       const WalkRules& rules, NodeOffsets& o) const {
+  const double half = 0.5 * node.side;
+  o.ox = image(node.centre.x - g.centre.x);
+  o.oy = image(node.centre.y - g.centre.y);
+  o.oz = image(node.centre.z - g.centre.z);
+  const double gx = gap(o.ox, half + g.half.x), gy = gap(o.oy, half + g.half.y), gz = gap(o.oz, half + g.half.z);
+  o.d2box = gx * gx + gy * gy + gz * gz;
+  // GADGET-2's safety check: a target within the cube grown by 10% per side opens it.
+  const double grown = 0.6 * node.side;
+  const bool inside_enlarged = std::fabs(o.ox) < grown + g.half.x && std::fabs(o.oy) < grown + g.half.y &&
+                               std::fabs(o.oz) < grown + g.half.z;
+  o.h = std::max(g.h_max, spline_length(node.max_softening));
+  if (rules.split && o.d2box > rules.cutoff * rules.cutoff) return Visit::skip;  // the mesh has it
+  // A node beyond every pair's spline length from the whole box takes the Newtonian
+  // expansion; one within it (softened_nodes) the softened one, judged by the same criterion
+  // (the softened field's derivatives are no larger than the Newtonian ones at the same
+  // distance, so the criterion bounds its neglected terms at least as well), but only when
+  // it is also seen under a small angle (kSoftenedNodeAngle) and every target pairs with all
+  // its particles at one spline length per target: the node's softenings are all alike, or
+  // no larger than any target's.
+  const bool beyond = o.d2box >= o.h * o.h;
+  if (!inside_enlarged && (beyond || rules.soft_allowed)) {
+    const double cx = gap(image(node.com.x - g.centre.x), g.half.x), cy = gap(image(node.com.y - g.centre.y), g.half.y),
+                 cz = gap(image(node.com.z - g.centre.z), g.half.z);
+    const double r2 = cx * cx + cy * cy + cz * cz;
+    const double l2 = node.side * node.side;
+    bool accept = false;
+    if (!g.relative) {
+      accept = l2 <= rules.theta2 * r2;
+    } else if (config.criterion == OpeningCriterion::gadget2_monopole) {
+      accept = config.G * node.mass * l2 <= g.a_crit * r2 * r2;  // G M l^2 / r^4 <= alpha |a_old|
+    } else {
+      accept = config.G * node.mass * l2 * node.side <= g.a_crit * r2 * r2 * std::sqrt(r2);  // G M l^3 / r^5
+    }
+    if (accept && !beyond)
+      accept = l2 <= kSoftenedNodeAngle * kSoftenedNodeAngle * r2 &&
+               (node.min_softening == node.max_softening || g.h_min >= spline_length(node.max_softening));
+    if (accept) return beyond ? Visit::accept : Visit::accept_softened;
+  }
+  // Another rank's node whose inside that rank did not send (TreeAcrossRanks): no walk it
+  // sent the node for opens it, so reaching here is a logic error the caller reports.
+  if (node.first_child == TreeNode::kPruned) return Visit::pruned;
+  // TreePM: a node of at most kDirectNodeSize particles gives its particles at once (the short
+  // range at high redshift opens nearly every node within the cut-off down to its leaves).
+  if (node.first_child >= 0 && !(rules.split && node.count <= kDirectNodeSize)) return Visit::open;
+  return Visit::list;
+}
+
 }  // namespace fountain::gravity

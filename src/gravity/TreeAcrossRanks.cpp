@@ -1,0 +1,662 @@
+#include "gravity/TreeAcrossRanks.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <type_traits>
+
+#include "gravity/GravityWalkGroup.hpp"
+
+namespace fountain::gravity {
+
+namespace {
+
+template <class T>
+void put(std::vector<char>& out, const T& value) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  const std::size_t at = out.size();
+  out.resize(at + sizeof(T));
+  std::memcpy(out.data() + at, &value, sizeof(T));
+}
+
+// Reads back what put() wrote; a short message is a logic error (the ranks disagree).
+class Reader {
+ public:
+  explicit Reader(std::span<const char> in) : in_(in) {}
+  template <class T>
+  T get() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    if (at_ + sizeof(T) > in_.size())
+      throw std::logic_error("assemble_tree_across_ranks: a message ended early; the ranks disagree on the tree");
+    T value;
+    std::memcpy(&value, in_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+
+ private:
+  std::span<const char> in_;
+  std::size_t at_ = 0;
+};
+
+struct SourceRecord {
+  Vec3 x;
+  double mass = 0.0, softening = 0.0;
+  std::uint64_t place = 0;
+};
+
+// What bounds the walks of one rank's target batches (several batches merged): their box,
+// the spline lengths, and which opening criteria its groups may use, with the smallest
+// |a_old| of those that use the relative one.
+struct Envelope {
+  Vec3 lo, hi;
+  double h_max = 0.0, h_min = std::numeric_limits<double>::infinity();
+  double a_min = std::numeric_limits<double>::infinity();
+  std::int32_t any_barnes_hut = 0, any_relative = 0;
+};
+
+void widen(Envelope& e, const Envelope& other) {
+  for (int d = 0; d < 3; ++d) {
+    e.lo[d] = std::min(e.lo[d], other.lo[d]);
+    e.hi[d] = std::max(e.hi[d], other.hi[d]);
+  }
+  e.h_max = std::max(e.h_max, other.h_max);
+  e.h_min = std::min(e.h_min, other.h_min);
+  e.a_min = std::min(e.a_min, other.a_min);
+  e.any_barnes_hut |= other.any_barnes_hut;
+  e.any_relative |= other.any_relative;
+}
+
+double extent(const Envelope& e) { return std::max({e.hi.x - e.lo.x, e.hi.y - e.lo.y, e.hi.z - e.lo.z}); }
+
+}  // namespace
+
+// The assembly's steps, each a collective (docs/gravity.md, "Across ranks").
+class TreeAssembler {
+ public:
+  TreeAssembler(TreeMessages& ranks, const RankSources& mine, const TreeConfig& tree_config,
+                const WalkConfig& walk_config)
+      : tree_config_(tree_config), walk_config_(walk_config) {
+    check(mine);
+    ranks_ = &ranks;
+    mine_ = mine;
+    gather_limit_ = std::max<std::int64_t>(tree_config.max_leaf_size,
+                                           walk_config.split.enabled() ? GravityTree::kDirectNodeSize : 0);
+    has_sources_ = find_cube();
+    if (!has_sources_) return;
+    build_top();
+    build_own_subtrees();
+    gather_small_nodes(true);
+  }
+
+  void refit(TreeMessages& ranks, const RankSources& mine) {
+    check(mine);
+    if (mine.positions.size() != own_count_)
+      throw std::invalid_argument("TreeAcrossRanks::refit: " + std::to_string(mine.positions.size()) +
+                                  " sources for a tree of " + std::to_string(own_count_));
+    ranks_ = &ranks;
+    mine_ = mine;
+    if (!has_sources_) return;
+    bool loose = false;
+    for (Part& part : own_) {
+      std::vector<Vec3> x;
+      std::vector<double> m, eps;
+      for (const std::int32_t i : part.members) {
+        const auto u = static_cast<std::size_t>(i);
+        x.push_back(mine.positions[u]);
+        m.push_back(mine.masses[u]);
+        eps.push_back(mine.softenings[u]);
+      }
+      part.tree.refit(x, m, eps);
+      loose = loose || part.tree.loose();
+    }
+    loose_ = loose;
+    gather_small_nodes(false);
+  }
+
+  bool loose() const { return loose_; }
+  const TreeAcrossRanksCounts& counts() const { return counts_; }
+
+  GravityTree tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches) {
+    ranks_ = &ranks;
+    batches_ = batches;
+    GravityTree tree(tree_config_);
+    if (!has_sources_) return tree;
+    counts_.nodes_sent = counts_.sources_sent = counts_.nodes_received = counts_.sources_received = 0;
+    counts_.bytes_sent = counts_.top_nodes = 0;
+    exchange_essential_parts();
+    assemble(tree);
+    return tree;
+  }
+
+ private:
+  enum class Kind { internal, held, gathered, empty };
+  struct TopNode {
+    GravityTree::Cube cube;
+    int depth = 0;
+    std::int64_t total = 0;
+    Kind kind = Kind::internal;
+    int owner = -1;                   // held: the rank whose sources alone it holds
+    std::int32_t first = 0, count = 0;  // this rank's sources in it: items_[first, first + count)
+    std::array<std::int32_t, 8> child{-1, -1, -1, -1, -1, -1, -1, -1};
+    std::int32_t part = -1;  // held by this rank: own_[part]; gathered: gathered_[part]
+  };
+  struct Exported {
+    TreeNode node;
+    std::int32_t subtree = 1;  // exported nodes in its subtree, itself included
+  };
+  struct Part {  // a subtree built here, and its sources' indices in the assembled tree
+    GravityTree tree;
+    std::vector<std::int32_t> index;
+    std::vector<std::int32_t> members;  // this rank's own: its sources, in the subtree's numbering
+  };
+
+  static void check(const RankSources& mine) {
+    const std::size_t n = mine.positions.size();
+    if (mine.masses.size() != n || mine.softenings.size() != n || mine.places.size() != n)
+      throw std::invalid_argument("TreeAcrossRanks: positions, masses, softenings and places differ in length");
+    for (std::size_t i = 1; i < n; ++i)
+      if (!(mine.places[i - 1] < mine.places[i]))
+        throw std::invalid_argument("TreeAcrossRanks: source " + std::to_string(i) +
+                                    "'s place does not follow the one before it");
+  }
+
+  // The root cube, from every rank's bounds (min and max are exact in any order). False if
+  // no rank has a source.
+  bool find_cube() {
+    Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+            std::numeric_limits<double>::infinity()};
+    Vec3 hi = -1.0 * lo;
+    for (const Vec3& x : mine_.positions)
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], x[d]);
+        hi[d] = std::max(hi[d], x[d]);
+      }
+    own_count_ = mine_.positions.size();
+    std::vector<char> message;
+    put(message, lo);
+    put(message, hi);
+    put(message, static_cast<std::int64_t>(mine_.positions.size()));
+    std::int64_t total = 0;
+    for (const auto& m : ranks_->allgather(message)) {
+      Reader in(m);
+      const Vec3 l = in.get<Vec3>(), h = in.get<Vec3>();
+      const auto count = in.get<std::int64_t>();
+      if (count == 0) continue;
+      total += count;
+      for (int d = 0; d < 3; ++d) {
+        lo[d] = std::min(lo[d], l[d]);
+        hi[d] = std::max(hi[d], h[d]);
+      }
+    }
+    if (total == 0) return false;
+    cube_ = GravityTree::root_cube(lo, hi);
+    return true;
+  }
+
+  // The top, level by level: each rank counts its sources in the children of the level's
+  // split nodes, and the sums decide every child alike on every rank: one rank's sources
+  // only (held by it), few enough to gather, or split again.
+  void build_top() {
+    const auto n = static_cast<std::int32_t>(mine_.positions.size());
+    items_.resize(static_cast<std::size_t>(n));
+    scratch_.resize(static_cast<std::size_t>(n));
+    for (std::int32_t i = 0; i < n; ++i) items_[static_cast<std::size_t>(i)] = {mine_.positions[static_cast<std::size_t>(i)], i};
+    top_.push_back(TopNode{cube_, 0, 0, Kind::internal, -1, 0, n, {}, -1});
+    top_[0].child.fill(-1);
+    std::vector<std::int32_t> level{0};
+    while (!level.empty()) {
+      // Per node: this rank's count, whether it has any, and its rank + 1 if so.
+      std::vector<char> message;
+      for (const std::int32_t t : level) {
+        const std::int64_t c = top_[static_cast<std::size_t>(t)].count;
+        put(message, c);
+        put(message, static_cast<std::int64_t>(c > 0 ? 1 : 0));
+        put(message, static_cast<std::int64_t>(c > 0 ? ranks_->rank() + 1 : 0));
+      }
+      std::vector<std::int64_t> sums(3 * level.size(), 0);
+      for (const auto& m : ranks_->allgather(message)) {
+        Reader in(m);
+        for (auto& s : sums) s += in.get<std::int64_t>();
+      }
+      std::vector<std::int32_t> next;
+      for (std::size_t k = 0; k < level.size(); ++k) {
+        TopNode& node = top_[static_cast<std::size_t>(level[k])];
+        node.total = sums[3 * k];
+        const std::int64_t holders = sums[3 * k + 1];
+        if (node.total == 0) {
+          node.kind = Kind::empty;
+        } else if (holders == 1) {
+          node.kind = Kind::held;
+          node.owner = static_cast<int>(sums[3 * k + 2] - 1);
+        } else if (node.total <= gather_limit_ || node.depth >= GravityTree::kMaxDepth) {
+          node.kind = Kind::gathered;
+        } else {
+          split(level[k], next);
+        }
+      }
+      level = std::move(next);
+    }
+    for (TopNode& node : top_)
+      for (auto& c : node.child)
+        if (c >= 0 && top_[static_cast<std::size_t>(c)].kind == Kind::empty) c = -1;
+  }
+
+  // The top's nodes in preorder (children in octant order), as the tree lays them out.
+  std::vector<std::int32_t> preorder() const {
+    std::vector<std::int32_t> out, stack{0};
+    while (!stack.empty()) {
+      const std::int32_t t = stack.back();
+      stack.pop_back();
+      out.push_back(t);
+      const auto& child = top_[static_cast<std::size_t>(t)].child;
+      for (auto c = child.rbegin(); c != child.rend(); ++c)
+        if (*c >= 0) stack.push_back(*c);
+    }
+    return out;
+  }
+
+  // GravityTree::build's stable partition of this rank's sources in the node.
+  void split(std::int32_t t, std::vector<std::int32_t>& next) {
+    const TopNode node = top_[static_cast<std::size_t>(t)];
+    std::array<std::int32_t, 9> start{};
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k)
+      ++start[static_cast<std::size_t>(GravityTree::octant(items_[static_cast<std::size_t>(k)].x, node.cube.centre)) + 1];
+    for (int o = 0; o < 8; ++o) start[o + 1] += start[o];
+    std::array<std::int32_t, 8> fill{};
+    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+      const int o = GravityTree::octant(items_[static_cast<std::size_t>(k)].x, node.cube.centre);
+      scratch_[static_cast<std::size_t>(node.first + start[o] + fill[o]++)] = items_[static_cast<std::size_t>(k)];
+    }
+    std::copy(scratch_.begin() + node.first, scratch_.begin() + node.first + node.count, items_.begin() + node.first);
+    for (int o = 0; o < 8; ++o) {
+      TopNode child;
+      child.cube = {GravityTree::child_centre(node.cube.centre, node.cube.side, o), 0.5 * node.cube.side};
+      child.depth = node.depth + 1;
+      child.first = node.first + start[o];
+      child.count = start[o + 1] - start[o];
+      child.child.fill(-1);
+      const auto c = static_cast<std::int32_t>(top_.size());
+      top_[static_cast<std::size_t>(t)].child[static_cast<std::size_t>(o)] = c;
+      top_.push_back(child);
+      next.push_back(c);
+    }
+  }
+
+  // A subtree of the given sources (in the run's order) at top node t.
+  Part subtree(const TopNode& node, const std::vector<SourceRecord>& sources, std::vector<std::int32_t> index) {
+    std::vector<Vec3> x(sources.size());
+    std::vector<double> m(sources.size()), eps(sources.size());
+    for (std::size_t k = 0; k < sources.size(); ++k) {
+      x[k] = sources[k].x;
+      m[k] = sources[k].mass;
+      eps[k] = sources[k].softening;
+    }
+    Part part{GravityTree(x, m, eps, tree_config_, node.cube, node.depth), {}, {}};
+    part.index.resize(part.tree.index_.size());
+    for (std::size_t k = 0; k < part.index.size(); ++k)
+      part.index[k] = index[static_cast<std::size_t>(part.tree.index_[k])];
+    return part;
+  }
+
+  SourceRecord record(std::int32_t i) const {
+    const auto u = static_cast<std::size_t>(i);
+    return {mine_.positions[u], mine_.masses[u], mine_.softenings[u], mine_.places[u]};
+  }
+
+  void build_own_subtrees() {
+    for (TopNode& node : top_) {
+      if (node.kind != Kind::held || node.owner != ranks_->rank()) continue;
+      std::vector<SourceRecord> sources;
+      std::vector<std::int32_t> index;
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        sources.push_back(record(items_[static_cast<std::size_t>(k)].index));
+        index.push_back(items_[static_cast<std::size_t>(k)].index);
+      }
+      node.part = static_cast<std::int32_t>(own_.size());
+      std::vector<std::int32_t> members = index;
+      own_.push_back(subtree(node, sources, std::move(index)));
+      own_.back().members = std::move(members);
+      counts_.own_subtrees += static_cast<std::int64_t>(own_.back().tree.nodes_.size());
+    }
+  }
+
+  // Every rank's sources in each small node of several ranks go to every rank, which builds
+  // the node's subtree from them in the run's order (or refits it: same sources, same
+  // order). The message starts with whether this rank's subtrees grew loose.
+  void gather_small_nodes(bool build) {
+    std::vector<char> message;
+    put(message, static_cast<std::int64_t>(loose_ ? 1 : 0));
+    for (const TopNode& node : top_) {
+      if (node.kind != Kind::gathered) continue;
+      put(message, static_cast<std::int64_t>(node.count));
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k)
+        put(message, record(items_[static_cast<std::size_t>(k)].index));
+    }
+    const auto all = ranks_->allgather(message);
+    std::vector<Reader> in;
+    for (const auto& m : all) {
+      in.emplace_back(m);
+      loose_ = (in.back().get<std::int64_t>() != 0) || loose_;
+    }
+    for (TopNode& node : top_) {
+      if (node.kind != Kind::gathered) continue;
+      struct Arrival {
+        SourceRecord source;
+        std::int32_t index;
+      };
+      std::vector<Arrival> arrivals;
+      for (int r = 0; r < static_cast<int>(in.size()); ++r) {
+        const auto count = in[static_cast<std::size_t>(r)].get<std::int64_t>();
+        for (std::int64_t k = 0; k < count; ++k) {
+          const auto s = in[static_cast<std::size_t>(r)].get<SourceRecord>();
+          arrivals.push_back({s, kForeignSource});
+        }
+        if (r == ranks_->rank())  // this rank's own keep their index
+          for (std::int32_t k = 0; k < node.count; ++k)
+            arrivals[arrivals.size() - static_cast<std::size_t>(node.count) + static_cast<std::size_t>(k)].index =
+                items_[static_cast<std::size_t>(node.first + k)].index;
+      }
+      std::sort(arrivals.begin(), arrivals.end(),
+                [](const Arrival& a, const Arrival& b) { return a.source.place < b.source.place; });
+      if (static_cast<std::int64_t>(arrivals.size()) != node.total)
+        throw std::logic_error("assemble_tree_across_ranks: the ranks disagree on a node's sources");
+      if (!build) {
+        Part& part = gathered_[static_cast<std::size_t>(node.part)];
+        std::vector<Vec3> x;
+        std::vector<double> m, eps;
+        for (const Arrival& a : arrivals) {
+          x.push_back(a.source.x);
+          m.push_back(a.source.mass);
+          eps.push_back(a.source.softening);
+        }
+        part.tree.refit(x, m, eps);
+        loose_ = loose_ || part.tree.loose();
+        continue;
+      }
+      std::vector<SourceRecord> sources;
+      std::vector<std::int32_t> index;
+      for (const Arrival& a : arrivals) {
+        sources.push_back(a.source);
+        index.push_back(a.index);
+      }
+      node.part = static_cast<std::int32_t>(gathered_.size());
+      gathered_.push_back(subtree(node, sources, std::move(index)));
+      ++counts_.gathered_nodes;
+    }
+  }
+
+  // This rank's batches as envelopes: consecutive batches merged while the box stays small
+  // (a periodic walk takes nearest images from a box's centre, valid only for a box of at
+  // most the width a walk group may have).
+  std::vector<Envelope> envelopes() const {
+    double widest = cube_.side / 8.0;
+    if (tree_config_.periodic && walk_config_.split.enabled())
+      widest = std::min(widest, 0.5 * tree_config_.box_size - walk_config_.split.cutoff_radius());
+    std::vector<Envelope> out;
+    for (const TargetBatch& batch : batches_) {
+      if (batch.targets.empty()) continue;
+      Envelope e;
+      e.lo = e.hi = batch.targets[0].position;
+      for (const GravityTarget& t : batch.targets) {
+        for (int d = 0; d < 3; ++d) {
+          e.lo[d] = std::min(e.lo[d], t.position[d]);
+          e.hi[d] = std::max(e.hi[d], t.position[d]);
+        }
+        e.h_max = std::max(e.h_max, spline_length(t.softening));
+        e.h_min = std::min(e.h_min, spline_length(t.softening));
+        if (t.a_old >= 0.0) {
+          e.any_relative = 1;
+          e.a_min = std::min(e.a_min, t.a_old);
+        } else {
+          e.any_barnes_hut = 1;
+        }
+      }
+      if (!out.empty()) {
+        Envelope merged = out.back();
+        widen(merged, e);
+        if (extent(merged) <= widest) {
+          out.back() = merged;
+          continue;
+        }
+      }
+      out.push_back(e);
+    }
+    return out;
+  }
+
+  // The walk groups an envelope stands for: every group of its targets decides at each node
+  // at least as strictly as these (a box at least as large, spline lengths at least as far
+  // apart, the smallest |a_old|), one group per opening criterion its targets may use.
+  std::vector<GravityTree::Group> envelope_groups(const Envelope& e) const {
+    // Above the rounding of any group's box about its own centre.
+    const double margin = 1e-9 * (cube_.side + std::fabs(cube_.centre.x) + std::fabs(cube_.centre.y) +
+                                  std::fabs(cube_.centre.z));
+    GravityTree::Group g;
+    g.centre = 0.5 * (e.lo + e.hi);
+    g.half = 0.5 * (e.hi - e.lo) + Vec3{margin, margin, margin};
+    g.h_max = e.h_max;
+    g.h_min = e.h_min;
+    std::vector<GravityTree::Group> out;
+    if (e.any_barnes_hut) {
+      g.relative = false;
+      out.push_back(g);
+    }
+    if (e.any_relative) {
+      g.relative = true;
+      g.a_crit = walk_config_.alpha_force * e.a_min;
+      out.push_back(g);
+    }
+    return out;
+  }
+
+  // What of one held subtree the walks of `groups` may visit, in preorder: a node every group
+  // passes by or accepts goes without its inside; one some group opens, with its children; one
+  // some group lists, with its sources.
+  void export_subtree(const GravityTree& sub, const std::vector<GravityTree::Group>& groups,
+                      const GravityTree::WalkRules& rules, std::vector<char>& message) {
+    std::vector<Exported> nodes;
+    std::vector<SourceRecord> sources;
+    std::vector<std::int32_t> all(groups.size());
+    for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
+    export_node(sub, 0, groups, all, rules, nodes, sources);
+    put(message, static_cast<std::int64_t>(nodes.size()));
+    put(message, static_cast<std::int64_t>(sources.size()));
+    for (const Exported& e : nodes) put(message, e);
+    for (const SourceRecord& s : sources) put(message, s);
+    counts_.nodes_sent += static_cast<std::int64_t>(nodes.size());
+    counts_.sources_sent += static_cast<std::int64_t>(sources.size());
+  }
+
+  void export_node(const GravityTree& sub, std::int32_t n, const std::vector<GravityTree::Group>& groups,
+                   const std::vector<std::int32_t>& active, const GravityTree::WalkRules& rules,
+                   std::vector<Exported>& nodes, std::vector<SourceRecord>& sources) {
+    const TreeNode& node = sub.nodes_[static_cast<std::size_t>(n)];
+    const std::size_t at = nodes.size();
+    nodes.push_back({node, 1});
+    std::vector<std::int32_t> opening;
+    bool listed = false;
+    GravityTree::NodeOffsets o;
+    for (const std::int32_t k : active) {
+      switch (sub.decide(node, groups[static_cast<std::size_t>(k)], walk_config_, rules, o)) {
+        case GravityTree::Visit::open:
+          opening.push_back(k);
+          break;
+        case GravityTree::Visit::list:
+          listed = true;
+          break;
+        case GravityTree::Visit::pruned:
+          throw std::logic_error("assemble_tree_across_ranks: a rank's own subtree has a pruned node");
+        default:
+          break;
+      }
+    }
+    if (!opening.empty()) {
+      const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(sub.nodes_.size()) : node.next;
+      for (std::int32_t c = node.first_child; c >= 0 && c < end; c = sub.nodes_[static_cast<std::size_t>(c)].next)
+        export_node(sub, c, groups, opening, rules, nodes, sources);
+    } else if (listed) {
+      nodes[at].node.first_child = -1;
+      nodes[at].node.first = static_cast<std::int32_t>(sources.size());
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        const auto u = static_cast<std::size_t>(k);
+        sources.push_back({sub.pos_[u], sub.mass_[u], sub.eps_[u], 0});
+      }
+    } else {
+      nodes[at].node.first_child = TreeNode::kPruned;
+    }
+    nodes[at].subtree = static_cast<std::int32_t>(nodes.size() - at);
+  }
+
+  // Each rank sends every other rank what of its held subtrees that rank's batches may
+  // visit.
+  void exchange_essential_parts() {
+    std::vector<char> message;
+    for (const Envelope& e : envelopes()) put(message, e);
+    const auto all = ranks_->allgather(message);
+    // The rules of the whole tree's walk (its slack follows the root cube).
+    TreeNode root;
+    root.centre = cube_.centre;
+    root.side = cube_.side;
+    const GravityTree::WalkRules rules = GravityTree::walk_rules(walk_config_, root);
+    std::vector<std::vector<char>> to(static_cast<std::size_t>(ranks_->size()));
+    for (int q = 0; q < ranks_->size(); ++q) {
+      if (q == ranks_->rank()) continue;
+      std::vector<GravityTree::Group> groups;
+      Reader in(all[static_cast<std::size_t>(q)]);
+      for (std::size_t k = 0; k < all[static_cast<std::size_t>(q)].size() / sizeof(Envelope); ++k)
+        for (const auto& g : envelope_groups(in.get<Envelope>())) groups.push_back(g);
+      // In the order the receiver splices them: the top's preorder.
+      auto& out = to[static_cast<std::size_t>(q)];
+      for (const std::int32_t t : preorder()) {
+        const TopNode& node = top_[static_cast<std::size_t>(t)];
+        if (node.kind == Kind::held && node.owner == ranks_->rank())
+          export_subtree(own_[static_cast<std::size_t>(node.part)].tree, groups, rules, out);
+      }
+      counts_.bytes_sent += static_cast<std::int64_t>(out.size());
+    }
+    received_ = ranks_->alltoall(to);
+  }
+
+  // The tree in preorder: the top's nodes, this rank's subtrees, the gathered ones, and
+  // other ranks' parts as they sent them; then the top's moments from the leaves up.
+  void assemble(GravityTree& tree) {
+    tree.across_ranks_ = true;
+    tree.length_unit_ = std::ldexp(1.0, std::ilogb(cube_.side));
+    std::vector<Reader> in;
+    for (const auto& m : received_) in.emplace_back(m);
+    std::vector<std::int32_t> top_internal;
+    std::vector<SourceRecord> sources;
+    std::vector<std::int32_t> index;
+    auto splice = [&](const GravityTree& sub, const std::vector<std::int32_t>& sub_index) {
+      const auto base = static_cast<std::int32_t>(tree.nodes_.size());
+      const auto first = static_cast<std::int32_t>(sources.size());
+      const auto end = base + static_cast<std::int32_t>(sub.nodes_.size());
+      for (TreeNode node : sub.nodes_) {
+        node.first += first;
+        if (node.first_child >= 0) node.first_child += base;
+        node.next = node.next < 0 ? end : node.next + base;
+        tree.nodes_.push_back(node);
+      }
+      for (std::size_t k = 0; k < sub.pos_.size(); ++k) {
+        sources.push_back({sub.pos_[k], sub.mass_[k], sub.eps_[k], 0});
+        index.push_back(sub_index[k]);
+      }
+    };
+    auto append = [&](auto&& self, std::int32_t t) -> void {
+      const TopNode& top = top_[static_cast<std::size_t>(t)];
+      if (top.kind == Kind::internal) {
+        const auto at = static_cast<std::int32_t>(tree.nodes_.size());
+        TreeNode node;
+        node.centre = top.cube.centre;
+        node.side = node.built_side = top.cube.side;
+        node.count = static_cast<std::int32_t>(top.total);
+        node.first = static_cast<std::int32_t>(sources.size());
+        node.first_child = at + 1;
+        tree.nodes_.push_back(node);
+        top_internal.push_back(at);
+        ++counts_.top_nodes;
+        for (const std::int32_t c : top.child)
+          if (c >= 0) self(self, c);
+        tree.nodes_[static_cast<std::size_t>(at)].next = static_cast<std::int32_t>(tree.nodes_.size());
+      } else if (top.kind == Kind::gathered) {
+        ++counts_.top_nodes;
+        const Part& part = gathered_[static_cast<std::size_t>(top.part)];
+        splice(part.tree, part.index);
+      } else if (top.owner == ranks_->rank()) {
+        const Part& part = own_[static_cast<std::size_t>(top.part)];
+        splice(part.tree, part.index);
+      } else {
+        Reader& from = in[static_cast<std::size_t>(top.owner)];
+        const auto node_count = from.get<std::int64_t>();
+        const auto source_count = from.get<std::int64_t>();
+        const auto first = static_cast<std::int32_t>(sources.size());
+        for (std::int64_t k = 0; k < node_count; ++k) {
+          const auto e = from.get<Exported>();
+          TreeNode node = e.node;
+          const auto here = static_cast<std::int32_t>(tree.nodes_.size());
+          if (node.first_child >= 0) node.first_child = here + 1;
+          if (node.first_child == -1) node.first += first;
+          node.next = here + e.subtree;
+          tree.nodes_.push_back(node);
+        }
+        for (std::int64_t k = 0; k < source_count; ++k) {
+          sources.push_back(from.get<SourceRecord>());
+          index.push_back(kForeignSource);
+        }
+        counts_.nodes_received += node_count;
+        counts_.sources_received += source_count;
+      }
+    };
+    append(append, 0);
+    const auto size = static_cast<std::int32_t>(tree.nodes_.size());
+    for (TreeNode& node : tree.nodes_)
+      if (node.next >= size) node.next = -1;
+
+    const std::size_t n = sources.size();
+    tree.index_ = std::move(index);
+    tree.pos_.resize(n);
+    tree.mass_.resize(n);
+    tree.spline_.resize(n);
+    tree.spline_f_.resize(n);
+    tree.spline_inv_f_.resize(n);
+    tree.eps_.resize(n);
+    for (std::size_t k = 0; k < n; ++k)
+      tree.store_source(static_cast<std::int32_t>(k), tree.index_[k], {sources[k].x, sources[k].mass, sources[k].softening});
+    for (auto t = top_internal.rbegin(); t != top_internal.rend(); ++t) tree.node_moments(*t);
+  }
+
+  TreeMessages* ranks_ = nullptr;  // the present call's
+  RankSources mine_;                // the present call's
+  std::span<const TargetBatch> batches_;
+  std::size_t own_count_ = 0;
+  bool has_sources_ = false, loose_ = false;
+  TreeConfig tree_config_;
+  WalkConfig walk_config_;
+  std::int64_t gather_limit_ = 0;
+  GravityTree::Cube cube_;
+  std::vector<GravityTree::SortItem> items_, scratch_;
+  std::vector<TopNode> top_;
+  std::vector<Part> own_, gathered_;
+  std::vector<std::vector<char>> received_;
+  TreeAcrossRanksCounts counts_;
+};
+
+TreeAcrossRanks::TreeAcrossRanks(TreeMessages& ranks, const RankSources& mine, const TreeConfig& tree_config,
+                                 const WalkConfig& walk_config)
+    : impl_(std::make_unique<TreeAssembler>(ranks, mine, tree_config, walk_config)) {}
+TreeAcrossRanks::~TreeAcrossRanks() = default;
+TreeAcrossRanks::TreeAcrossRanks(TreeAcrossRanks&&) noexcept = default;
+TreeAcrossRanks& TreeAcrossRanks::operator=(TreeAcrossRanks&&) noexcept = default;
+void TreeAcrossRanks::refit(TreeMessages& ranks, const RankSources& mine) { impl_->refit(ranks, mine); }
+bool TreeAcrossRanks::loose() const { return impl_->loose(); }
+GravityTree TreeAcrossRanks::tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches) {
+  return impl_->tree_for(ranks, batches);
+}
+const TreeAcrossRanksCounts& TreeAcrossRanks::counts() const { return impl_->counts(); }
+
+}  // namespace fountain::gravity
