@@ -49,6 +49,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--eps-cold", eps_cold);
   app.add_option("--eps-hot", eps_hot);
   app.add_option("--measure-from", measure_from, "time from which steps are timed (internal units)");
+  bool assemble_tree = false;
+  app.add_flag("--assemble-tree", assemble_tree, "domain.assemble_gravity_tree: each rank's tree assembled across ranks");
   CLI11_PARSE(app, argc, argv);
 
   ics::RotatingSphereParams sp;
@@ -78,6 +80,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.star_formation.enabled = star_formation;
   c.feedback.eps_cold = eps_cold;
   c.feedback.eps_hot = eps_hot;
+  c.assemble_gravity_tree = assemble_tree;
   const std::size_t n = ic.gas.size() + ic.dm.size();
 
   const auto t0 = std::chrono::steady_clock::now();

@@ -192,6 +192,15 @@ $sphere_physics" ;;
         awk -v k="$kept" 'BEGIN { exit !(k < 100) }' || fail "rank 0 kept every leaf current ($kept%): no stale copy was tested"
         echo "$n ranks: rank 0 kept $kept% of the leaves current"
       fi
+      if [ "$case_name" = mpi_gravity_ranks ] || [ "$case_name" = mpi_feedback_ranks ]; then
+        # Each rank assembling its gravity tree from its own subtrees and the other ranks' parts
+        # gives the same bits as every rank building the whole tree.
+        write_params "outtree$n"
+        printf 'domain:\n  assemble_gravity_tree: true\n' >> params.yml
+        mpirun_n "$n" "$bin" run params.yml -q -t 1 > "runtree$n.txt" 2>&1 || { cat "runtree$n.txt"; fail "$n-rank run, assembled tree"; }
+        grep "^gravity tree: assembled on each rank" "runtree$n.txt" || { cat "runtree$n.txt"; fail "the tree was not assembled across ranks"; }
+        "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 "outtree$n/snapshot_0001.hdf5"
+      fi
       if [ "$case_name" = mpi_uneven_ranks ]; then
         chosen=$(sed -n "s/^ranks: $n, cell owners chosen \([0-9]*\) times.*/\1/p" "run$n.txt")
         [ "$chosen" -gt 1 ] || fail "owners were chosen only $chosen times: no repartition mid-run"

@@ -4,6 +4,7 @@
 #include <optional>
 #include <string>
 
+#include "engine/Engine.hpp"
 #include "engine/RunConfig.hpp"
 #include "step/StarFormationTally.hpp"
 
@@ -28,6 +29,7 @@ struct RunSummary {
   double held_share = 1.0;  // of the leaves, kept current by this rank (Engine::held_share)
   int mesh_cells = 0, mesh_planes = 0;  // the periodic mesh's side, and this rank's x-planes of it
   std::size_t mesh_bytes = 0;           // of the mesh, held by this rank
+  Engine::TreeAssembly tree_assembly;   // the gravity trees this rank assembled across ranks
   long long h_max_capped = 0;  // particle-steps held at hydro.h_max short of neighbours
   long long h_min_held = 0;    // particle-steps held at the floor of h (hydro.h_min_ratio)
   long long msph_decoupled = 0;  // force interactions the MSPH rule dropped

@@ -242,6 +242,14 @@ int main(int argc, char** argv) {
       if (mpi.rank() == 0 && s.mesh_cells > 0)
         fmt::print(stderr, "mesh: {}^3 in {} slabs; rank 0 held {} planes, {:.3g} MB\n", s.mesh_cells, s.ranks,
                    s.mesh_planes, 1e-6 * static_cast<double>(s.mesh_bytes));
+      if (mpi.rank() == 0 && s.tree_assembly.assemblies > 0) {
+        const double n = static_cast<double>(s.tree_assembly.assemblies);
+        fmt::print(stderr,
+                   "gravity tree: assembled on each rank {} times; rank 0 received {:.4g} nodes and {:.4g} sources "
+                   "a time from the other ranks\n",
+                   s.tree_assembly.assemblies, static_cast<double>(s.tree_assembly.nodes_received) / n,
+                   static_cast<double>(s.tree_assembly.sources_received) / n);
+      }
       if (mpi.rank() == 0 && s.halo_mode)
         fmt::print(stderr, "halo mode: rank 0 kept {:.1f}% of the leaves current (mean over the recuts)\n",
                    100.0 * s.held_share);

@@ -19,9 +19,11 @@
 #include "domain/BoundsAcrossRanks.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
+#include "engine/TreeMessagesOverRanks.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "gravity/GravityTasks.hpp"
 #include "gravity/LongRangeForce.hpp"
+#include "gravity/TreeAcrossRanks.hpp"
 #include "cosmology/IntegrationFactors.hpp"
 #include "hydro/HydroLoops.hpp"
 #include "hydro/HydroTasks.hpp"
@@ -98,6 +100,13 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
                                  config_.repartition_imbalance, config_.repartition_min_steps);
   if (share && !layout_.halo_mode())
     throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
+  // Each rank builds the tree of its own leaves' particles and assembles each step's tree
+  // from it and what the other ranks send for its walks (docs/gravity.md, "Across ranks").
+  if (ranks_ && config_.gravity.enabled && config_.assemble_gravity_tree && !layout_.halo_mode()) {
+    tree_messages_ = std::make_unique<TreeMessagesOverRanks>(*ranks_);
+    ctx_->tree_messages = tree_messages_.get();
+    ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
+  }
   if (config_.star_formation.enabled) setup_star_formation();
   if (config_.comoving.enabled) setup_comoving();
   if (config_.gravity.enabled && config_.space.periodic) setup_periodic_gravity();
@@ -247,6 +256,15 @@ void Engine::register_tasks() {
       g.depends(g.step_tasks(mesh).front(), g.step_tasks(done).front());
     });
   }
+  gravity_tree_type_ = gravity_types.tree;
+  if (ctx_->tree_messages && gravity_types.tree >= 0) {
+    // The tree's assembly is a collective too: after the mesh's, before star formation's end.
+    tasks_.link([types = gravity_types, done = star_formation_done](GraphBuilder& g) {
+      const int tree = g.step_tasks(types.tree).front();
+      if (types.mesh >= 0) g.depends(g.step_tasks(types.mesh).front(), tree);
+      if (done >= 0) g.depends(tree, g.step_tasks(done).front());
+    });
+  }
   if (ranks_) register_exchange_tasks(step.drift, step.kick_close, sph.ghost, sph.force, star_formation_done);
 }
 
@@ -349,7 +367,14 @@ void Engine::rebuild() {
     }
   }
   ctx_->cover_exceeded = false;
-  if (config_.gravity.enabled) {
+  if (config_.gravity.enabled && ctx_->tree_messages) {
+    // Across ranks the tree's build is a collective: on this thread, after the lists'.
+    find_neighbour_lists(for_each);
+    share_neighbour_lists();
+    gravity::build_tree(*ctx_);
+    build_graph();
+    ctx_->tree_current = true;
+  } else if (config_.gravity.enabled) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
     // beside the neighbour lists and the graph, which read only the cells, rather than in
     // the step's tree task, where it would hold up every walk. The lists' exchange across
@@ -620,12 +645,14 @@ void Engine::run_graph(StepInfo* info) {
       if (graph_.task(t).type == recv_type_) gates.tasks.push_back(t);
     gates.poll = [this](std::span<const int> waiting, std::vector<int>& opened) { poll_receives(waiting, opened); };
     // What other ranks wait for goes first: the sends and what leads to them (the drifts,
-    // density loops and ghosts of the cells that feed other ranks).
+    // density loops and ghosts of the cells that feed other ranks), and the gravity tree's
+    // assembly, a collective that every rank's walks wait for.
     std::vector<int> sends;
     listed_.assign(static_cast<std::size_t>(graph_.size()), 0);
     for (int t : step_tasks_) {
       listed_[static_cast<std::size_t>(t)] = 1;
-      if (graph_.task(t).type == send_type_) sends.push_back(t);
+      const int type = graph_.task(t).type;
+      if (type == send_type_ || (ctx_->tree_messages && type == gravity_tree_type_)) sends.push_back(t);
     }
     if (!sends.empty()) gates.urgent = graph_.ancestors(sends, listed_);
   }
@@ -633,6 +660,12 @@ void Engine::run_graph(StepInfo* info) {
   executor_.run(graph_, runner, records, &step_tasks_, gates.tasks.empty() && gates.urgent.empty() ? nullptr : &gates);
   graph_s_ += seconds_since(t_graph);
   records_stale_ = false;
+  if (ctx_->tree_across) {
+    const gravity::TreeAcrossRanksCounts& c = ctx_->tree_across->counts();
+    ++tree_assembly_.assemblies;
+    tree_assembly_.nodes_received += c.nodes_received;
+    tree_assembly_.sources_received += c.sources_received;
+  }
   if (ranks_) {
     const auto ns_since_graph = [&] {
       return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t_graph).count();

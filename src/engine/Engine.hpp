@@ -34,6 +34,7 @@ struct FeedbackState;
 namespace domain {
 class RankExchange;
 }
+class TreeMessagesOverRanks;
 
 // Sums over all particles (gas at predicted values), for conservation checks.
 struct Totals {
@@ -192,6 +193,12 @@ class Engine {
     std::size_t bytes = 0;
   };
   MeshShare mesh_share() const;
+  // Across ranks with domain.assemble_gravity_tree: the trees this rank assembled (one per
+  // task graph) and what the other ranks sent it for them, summed (all 0 otherwise).
+  struct TreeAssembly {
+    long long assemblies = 0, nodes_received = 0, sources_received = 0;
+  };
+  TreeAssembly tree_assembly() const { return tree_assembly_; }
   // The particles in the run's order, handed to rank 0 in pieces: gas(store, first, count)
   // for every gas particle in turn, then collisionless(...) likewise; the other ranks' calls
   // hand nothing (every rank calls it at the same point). Where rank 0 holds only some
@@ -351,6 +358,9 @@ class Engine {
   bool record_timeline_ = false;
 
   std::unique_ptr<domain::RankExchange> ranks_;   // null when running alone
+  std::unique_ptr<TreeMessagesOverRanks> tree_messages_;  // the gravity tree's, across ranks
+  int gravity_tree_type_ = -1;  // the gravity tree task's type (-1: no gravity)
+  TreeAssembly tree_assembly_;
   domain::RankLayout layout_;               // who owns and who keeps each leaf
   std::vector<std::vector<int>> send_to_;   // per cell: the ranks its ghost results go to this run
   std::vector<int> recv_handle_;            // per cell: its posted receive this run (-1: none)

@@ -100,6 +100,7 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.repartition_imbalance = p.real("domain.repartition_imbalance");
   c.repartition_min_steps = p.integer("domain.repartition_min_steps");
   c.message_bytes = static_cast<std::size_t>(p.integer("domain.message_bytes"));
+  c.assemble_gravity_tree = p.flag("domain.assemble_gravity_tree");
   c.units.length_cgs = p.real("units.length_cgs");
   c.units.mass_cgs = p.real("units.mass_cgs");
   c.units.velocity_cgs = p.real("units.velocity_cgs");

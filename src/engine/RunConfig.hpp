@@ -71,6 +71,7 @@ struct RunConfig {
   double repartition_imbalance = 0.1;  // across ranks: recut owners above this imbalance
   long long repartition_min_steps = 100;  // steps a cut stands before its imbalance is judged
   std::size_t message_bytes = std::size_t{1} << 20;  // halo mode: bytes of one all-to-all round to a rank
+  bool assemble_gravity_tree = false;  // across ranks: each rank's tree from its own subtrees and others' parts
   Units units;
   OutputConfig output;
   RestartConfig restart;

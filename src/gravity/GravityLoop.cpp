@@ -1,14 +1,110 @@
 #include "gravity/GravityLoop.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "gravity/GravityParams.hpp"
 #include "gravity/GravityTree.hpp"
 #include "gravity/LongRangeForce.hpp"
+#include "gravity/TreeAcrossRanks.hpp"
 
 namespace fountain::gravity {
 
+namespace {
+TreeConfig tree_config(const StepContext& ctx) {
+  TreeConfig config;
+  if (ctx.long_range) {
+    config.periodic = true;
+    config.box_size = ctx.long_range->mesh.box();
+  }
+  return config;
+}
+
+WalkConfig walk_config(const StepContext& ctx) {
+  WalkConfig config = ctx.gravity.walk();
+  if (ctx.long_range) config.split = ctx.long_range->mesh.split();
+  return config;
+}
+
+double old_acceleration(const Vec3& a) {
+  const double a2 = dot(a, a);
+  return a2 > 0.0 ? std::sqrt(a2) : kNoOldAcceleration;
+}
+
+// Leaf c's active particles of both species, as the walk takes them (walked together, in
+// groups), with their indices in the particle arrays.
+struct LeafTargets {
+  std::vector<GravityTarget> targets;
+  std::vector<std::size_t> gas, dm;
+};
+void leaf_targets(const StepContext& ctx, int c, LeafTargets& out) {
+  const GasParticles& gas = ctx.gas;
+  const CollisionlessParticles& dm = ctx.dm;
+  const Cell& cell = ctx.space.cell(c);
+  out.targets.clear();
+  out.gas.clear();
+  out.dm.clear();
+  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
+    if (!ctx.is_active(i)) continue;
+    out.targets.push_back({gas.x[i], ctx.softening_gas(), old_acceleration(gas.a_grav[i]), static_cast<std::int64_t>(i)});
+    out.gas.push_back(i);
+  }
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
+    if (!ctx.is_active_dm(i)) continue;
+    out.targets.push_back({dm.x[i], ctx.softening_of(i), old_acceleration(dm.a_grav[i]),
+                           static_cast<std::int64_t>(gas.size() + i)});
+    out.dm.push_back(i);
+  }
+}
+
+// This rank's sources across ranks: the particles of the leaves it owns, gas and then dark
+// matter, each in the arrays' order (the run's, as every rank holds every particle), named
+// by their index among one rank's sources.
+struct OwnSources {
+  std::vector<Vec3> x;
+  std::vector<double> m, eps;
+  std::vector<std::uint64_t> places;
+  std::vector<std::int32_t> names;
+  RankSources view() const { return {x, m, eps, places, names}; }
+};
+OwnSources own_sources(const StepContext& ctx) {
+  const GasParticles& gas = ctx.gas;
+  const CollisionlessParticles& dm = ctx.dm;
+  std::vector<std::size_t> g, d;
+  for (const int c : ctx.space.leaves()) {
+    if (!ctx.owns_leaf(c)) continue;
+    const Cell& cell = ctx.space.cell(c);
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) g.push_back(i);
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) d.push_back(i);
+  }
+  std::sort(g.begin(), g.end());
+  std::sort(d.begin(), d.end());
+  OwnSources s;
+  for (const std::size_t i : g) {
+    s.x.push_back(gas.x[i]);
+    s.m.push_back(gas.dynamical_mass(i));
+    s.eps.push_back(ctx.softening_gas());
+    s.places.push_back(i);
+  }
+  for (const std::size_t i : d) {
+    s.x.push_back(dm.x[i]);
+    s.m.push_back(dm.mass[i]);
+    s.eps.push_back(ctx.softening_of(i));
+    s.places.push_back(gas.size() + i);
+  }
+  for (const std::uint64_t p : s.places) s.names.push_back(static_cast<std::int32_t>(p));
+  return s;
+}
+}  // namespace
+
 void build_tree(StepContext& ctx) {
+  if (ctx.tree_messages) {
+    const OwnSources own = own_sources(ctx);
+    ctx.tree_across = std::make_unique<TreeAcrossRanks>(*ctx.tree_messages, own.view(), tree_config(ctx), walk_config(ctx));
+    ctx.tree.reset();  // assembled for each step's walks (finish_tree)
+    return;
+  }
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
@@ -27,12 +123,7 @@ void build_tree(StepContext& ctx) {
     m.push_back(dm.mass[i]);
     eps.push_back(ctx.softening_of(i));
   }
-  TreeConfig config;
-  if (ctx.long_range) {
-    config.periodic = true;
-    config.box_size = ctx.long_range->mesh.box();
-  }
-  ctx.tree = std::make_unique<GravityTree>(x, m, eps, config);
+  ctx.tree = std::make_unique<GravityTree>(x, m, eps, tree_config(ctx));
 }
 
 void compute_long_range(StepContext& ctx) {
@@ -69,6 +160,8 @@ void plan_tree_update(StepContext& ctx) {
   if (ctx.tree_current) {
     ctx.tree_update = U::keep;
     ctx.tree_current = false;  // the next run follows moved particles
+  } else if (ctx.tree_messages) {
+    ctx.tree_update = ctx.tree_across && !ctx.tree_across->loose() ? U::refit : U::build;
   } else {
     const bool fits = ctx.tree && !ctx.tree->loose() && ctx.tree->size() == ctx.gas.size() + ctx.dm.size();
     ctx.tree_update = fits ? U::refit : U::build;
@@ -76,7 +169,7 @@ void plan_tree_update(StepContext& ctx) {
 }
 
 void refit_tree_group(StepContext& ctx, int g) {
-  if (ctx.tree_update != StepContext::TreeUpdate::refit) return;
+  if (ctx.tree_update != StepContext::TreeUpdate::refit || ctx.tree_messages) return;
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n_gas = gas.size();
@@ -89,39 +182,40 @@ void refit_tree_group(StepContext& ctx, int g) {
 }
 
 void finish_tree(StepContext& ctx) {
+  if (ctx.tree_messages) {
+    // Across ranks: this rank's subtrees refitted (or all built anew), then the tree for the
+    // step's walks of its own leaves' active particles, assembled with what the other ranks
+    // send for them (every step: the walks and the moments change).
+    if (ctx.tree_update == StepContext::TreeUpdate::refit)
+      ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
+    else if (ctx.tree_update == StepContext::TreeUpdate::build)
+      build_tree(ctx);
+    std::vector<LeafTargets> leaves;
+    for (const int c : ctx.space.leaves()) {
+      if (!ctx.owns_leaf(c)) continue;
+      leaves.emplace_back();
+      leaf_targets(ctx, c, leaves.back());
+      if (leaves.back().targets.empty()) leaves.pop_back();
+    }
+    std::vector<TargetBatch> batches;
+    for (const LeafTargets& l : leaves) batches.push_back({l.targets});
+    ctx.tree = std::make_unique<GravityTree>(ctx.tree_across->tree_for(*ctx.tree_messages, batches));
+    return;
+  }
   if (ctx.tree_update == StepContext::TreeUpdate::refit) ctx.tree->finish_refit();
   else if (ctx.tree_update == StepContext::TreeUpdate::build) build_tree(ctx);
 }
 
-namespace {
-double old_acceleration(const Vec3& a) {
-  const double a2 = dot(a, a);
-  return a2 > 0.0 ? std::sqrt(a2) : kNoOldAcceleration;
-}
-}  // namespace
-
 void walk_cell(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
   CollisionlessParticles& dm = ctx.dm;
-  const Cell& cell = ctx.space.cell(c);
-  WalkConfig config = ctx.gravity.walk();
+  const WalkConfig config = walk_config(ctx);
   const LongRangeForce* long_range = ctx.long_range.get();
-  if (long_range) config.split = long_range->mesh.split();
-  // The cell's active particles of both species are walked together, in groups.
-  std::vector<GravityTarget> targets;
-  std::vector<std::size_t> gas_targets, dm_targets;
-  for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
-    if (!ctx.is_active(i)) continue;
-    targets.push_back({gas.x[i], ctx.softening_gas(), old_acceleration(gas.a_grav[i]),
-                       static_cast<std::int64_t>(i)});
-    gas_targets.push_back(i);
-  }
-  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
-    if (!ctx.is_active_dm(i)) continue;
-    targets.push_back({dm.x[i], ctx.softening_of(i), old_acceleration(dm.a_grav[i]),
-                       static_cast<std::int64_t>(gas.size() + i)});
-    dm_targets.push_back(i);
-  }
+  LeafTargets leaf;
+  leaf_targets(ctx, c, leaf);
+  const std::vector<GravityTarget>& targets = leaf.targets;
+  const std::vector<std::size_t>& gas_targets = leaf.gas;
+  const std::vector<std::size_t>& dm_targets = leaf.dm;
   std::vector<GravityResult> results(targets.size());
   // More than two groups: idle threads may take some.
   const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::group_size(config));

@@ -157,8 +157,9 @@ class TreeAssembler {
 
   static void check(const RankSources& mine) {
     const std::size_t n = mine.positions.size();
-    if (mine.masses.size() != n || mine.softenings.size() != n || mine.places.size() != n)
-      throw std::invalid_argument("TreeAcrossRanks: positions, masses, softenings and places differ in length");
+    if (mine.masses.size() != n || mine.softenings.size() != n || mine.places.size() != n ||
+        (!mine.names.empty() && mine.names.size() != n))
+      throw std::invalid_argument("TreeAcrossRanks: positions, masses, softenings, places and names differ in length");
     for (std::size_t i = 1; i < n; ++i)
       if (!(mine.places[i - 1] < mine.places[i]))
         throw std::invalid_argument("TreeAcrossRanks: source " + std::to_string(i) +
@@ -303,6 +304,8 @@ class TreeAssembler {
     return part;
   }
 
+  std::int32_t name(std::int32_t i) const { return mine_.names.empty() ? i : mine_.names[static_cast<std::size_t>(i)]; }
+
   SourceRecord record(std::int32_t i) const {
     const auto u = static_cast<std::size_t>(i);
     return {mine_.positions[u], mine_.masses[u], mine_.softenings[u], mine_.places[u]};
@@ -312,13 +315,14 @@ class TreeAssembler {
     for (TopNode& node : top_) {
       if (node.kind != Kind::held || node.owner != ranks_->rank()) continue;
       std::vector<SourceRecord> sources;
-      std::vector<std::int32_t> index;
+      std::vector<std::int32_t> index, members;
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        sources.push_back(record(items_[static_cast<std::size_t>(k)].index));
-        index.push_back(items_[static_cast<std::size_t>(k)].index);
+        const std::int32_t i = items_[static_cast<std::size_t>(k)].index;
+        sources.push_back(record(i));
+        index.push_back(name(i));
+        members.push_back(i);
       }
       node.part = static_cast<std::int32_t>(own_.size());
-      std::vector<std::int32_t> members = index;
       own_.push_back(subtree(node, sources, std::move(index)));
       own_.back().members = std::move(members);
       counts_.own_subtrees += static_cast<std::int64_t>(own_.back().tree.nodes_.size());
@@ -359,7 +363,7 @@ class TreeAssembler {
         if (r == ranks_->rank())  // this rank's own keep their index
           for (std::int32_t k = 0; k < node.count; ++k)
             arrivals[arrivals.size() - static_cast<std::size_t>(node.count) + static_cast<std::size_t>(k)].index =
-                items_[static_cast<std::size_t>(node.first + k)].index;
+                name(items_[static_cast<std::size_t>(node.first + k)].index);
       }
       std::sort(arrivals.begin(), arrivals.end(),
                 [](const Arrival& a, const Arrival& b) { return a.source.place < b.source.place; });

@@ -30,6 +30,9 @@ struct RankSources {
   std::span<const Vec3> positions;
   std::span<const double> masses, softenings;
   std::span<const std::uint64_t> places;
+  // The index each source has in the assembled tree, as the walks' targets name it
+  // (GravityTarget::source_index); empty: its position here.
+  std::span<const std::int32_t> names = {};
 };
 
 // The targets a rank will walk in one call of GravityTree::accelerate (a cell's active
@@ -63,8 +66,8 @@ class TreeAssembler;
 //     reaches into it throws a std::logic_error rather than answer differently).
 // Walks of the batches' targets on tree_for()'s tree then give what one rank's GravityTree
 // over every source gives them, bit for bit, after the same builds and refits. Sources of this
-// rank keep their index (their position in `mine`, as the targets' source_index names them);
-// every other rank's source has index kForeignSource.
+// rank keep their name (RankSources::names, as the targets' source_index names them); every
+// other rank's source has index kForeignSource.
 // Every call is a collective: every rank calls it, with the same configurations.
 class TreeAcrossRanks {
  public:

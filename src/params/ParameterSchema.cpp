@@ -203,6 +203,8 @@ const std::vector<ParamSpec>& parameter_schema() {
            "Across MPI ranks: when the cells are recut, their owners are chosen anew if, in the work measured since they were last chosen, the most loaded rank's exceeds the mean by more than this fraction (0: at every recut that domain.repartition_min_steps allows)."),
       integer("domain.repartition_min_steps", "100", 0, 1e15,
               "Across MPI ranks: owners, once chosen, are judged only after this many steps (0: at every recut), so that the imbalance is measured over enough steps to be more than noise."),
+      boolean("domain.assemble_gravity_tree", "false",
+              "Across MPI ranks, with gravity: each rank builds the tree of its own cells' particles and, each step, receives from the other ranks what of their trees its walks open, where otherwise every rank builds the whole tree from every particle. The results are the same bits; while every rank holds every particle the whole tree costs less time and traffic (docs/performance.md)."),
       integer("domain.message_bytes", "1048576", 1, 1e15,
               "Across MPI ranks, in halo mode: the most bytes one round of an all-to-all carries from a rank to another (a recut's particles; the exchange after each task graph, in whole cells); a larger exchange goes in several rounds, so that the buffers kept for them stay about this size."),
   };

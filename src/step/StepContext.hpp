@@ -1,6 +1,7 @@
 // What every task of a step needs: the particles, the cells, the parameters and the clock.
 #pragma once
 #include <atomic>
+#include <functional>
 #include <limits>
 
 #include <memory>
@@ -21,6 +22,8 @@ class RadiativeCooling;
 }
 namespace gravity {
 class GravityTree;
+class TreeAcrossRanks;
+class TreeMessages;
 struct LongRangeForce;
 }
 
@@ -49,6 +52,13 @@ struct StepContext {
   // Set when the tree was built at the particles' present positions (at a rebuild, before the
   // step's graph): the step's tree tasks then have nothing to do.
   bool tree_current = false;
+  // Across ranks (each rank walking its own leaves): the tree's part this rank builds and
+  // refits, and the messages that assemble each step's tree from it (docs/gravity.md, "Across
+  // ranks"); null when the tree is built whole from every particle.
+  std::unique_ptr<gravity::TreeAcrossRanks> tree_across{};
+  gravity::TreeMessages* tree_messages = nullptr;
+  // Whether this rank owns leaf c (its tasks run here); every leaf when alone.
+  std::function<bool(int)> owns_leaf = [](int) { return true; };
   // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
   enum class TreeUpdate { keep, refit, build };
   TreeUpdate tree_update = TreeUpdate::build;
