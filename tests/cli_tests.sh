@@ -159,11 +159,15 @@ output:
   statistics_every: 4
   gather_particles: 40" ;;
       mpi_gravity_ranks)
-        "$bin" ic evrard -n 6 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Evrard ICs"
+        # 7,208 particles on 4 x 4 x 4 top cells: every rank owns some, and each assembles its
+        # gravity tree with parts of the others' (halo mode: gas only, open boundaries).
+        "$bin" ic evrard -n 12 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Evrard ICs"
         T_END=0.05 extra="gravity:
   enabled: true
   softening_gas: 0.01
-  G: 1" ;;
+  G: 1
+space:
+  top_cells: 4" ;;
       mpi_feedback_ranks)
         "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
         T_END=6e-4 extra="$sphere_feedback
@@ -192,7 +196,13 @@ $sphere_physics" ;;
         awk -v k="$kept" 'BEGIN { exit !(k < 100) }' || fail "rank 0 kept every leaf current ($kept%): no stale copy was tested"
         echo "$n ranks: rank 0 kept $kept% of the leaves current"
       fi
-      if [ "$case_name" = mpi_gravity_ranks ] || [ "$case_name" = mpi_feedback_ranks ]; then
+      if [ "$case_name" = mpi_gravity_ranks ]; then
+        # Self-gravitating gas runs in halo mode, each rank's tree assembled across ranks.
+        grep "^halo mode: rank 0 kept" "run$n.txt" || { cat "run$n.txt"; fail "the Evrard run was not in halo mode"; }
+        received=$(sed -n 's/^gravity tree: .* and \([0-9.e+]*\) sources a time.*/\1/p' "run$n.txt")
+        awk -v r="$received" 'BEGIN { exit !(r > 0) }' || { cat "run$n.txt"; fail "rank 0 received no other rank's sources"; }
+      fi
+      if [ "$case_name" = mpi_feedback_ranks ]; then
         # Each rank assembling its gravity tree from its own subtrees and the other ranks' parts
         # gives the same bits as every rank building the whole tree.
         write_params "outtree$n"
@@ -218,6 +228,16 @@ $sphere_physics" ;;
         echo "$n ranks: owners chosen $chosen times at every recut, $chosen_min with a long span"
       fi
     done
+    if [ "$case_name" = mpi_gravity_ranks ]; then
+      # Stopped half-way on 2 ranks as a kill would stop it, the run continues from its
+      # restart set on 3 ranks as the uninterrupted 1-rank run ends.
+      write_params outB
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --abandon-after-steps 30 > killed.txt 2>&1 || { cat killed.txt; fail "2-rank run to be stopped"; }
+      grep -q "^abandoned after step 30" killed.txt || { cat killed.txt; fail "the 2-rank run did not stop at step 30"; }
+      mpirun_n 3 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 3 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
+    fi
     if [ "$case_name" = mpi_feedback_ranks ]; then
       "$python" -c "
 import h5py, sys

@@ -182,15 +182,23 @@ TEST_F(TwoRanks, GhostResultsFitTheirAnnouncedSizeAndComeBackExactly) {
 
 TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep) {
   // Halo mode sends only the fields a step changes; the rest must be ones that a run without
-  // gravity and star formation never changes but by the drift (positions) or not at all. A
-  // field added to GasParticles fails here until it is placed in one list or the other.
+  // star formation or periodic gravity never changes but by the drift (positions) or not at
+  // all, or (the potential) that nothing reads of a held copy. With gravity the acceleration
+  // goes too, which a holder's drift reads. A field added to GasParticles fails here until it
+  // is placed in one list or another.
   GasParticles g;
   std::vector<const void*> sent, unchanged{&g.id, &g.mass, &g.mass_initial, &g.mass_stars_hidden, &g.reservoir,
-                                          &g.promoted, &g.promotion_time, &g.feedback_hot_energy, &g.x, &g.a_grav,
+                                          &g.promoted, &g.promotion_time, &g.feedback_hot_energy, &g.x,
                                           &g.potential, &g.a_mesh, &g.potential_mesh, &g.wake_bin};
   // The derived fields are changed by a step but worked out again by the holder's own drift.
   std::vector<const void*> derived;
   halo_step_fields(g, [&](auto& f) { sent.push_back(&f); });
+  std::size_t gravity_fields = 0;
+  halo_gravity_fields(g, [&](auto& f) {
+    sent.push_back(&f);
+    ++gravity_fields;
+  });
+  EXPECT_EQ(gravity_fields, 1u);
   g.for_each_derived_field([&](auto& f) { derived.push_back(&f); });
   std::size_t fields = 0;
   g.for_each_field([&](auto& f) {

@@ -249,6 +249,14 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     read_options.share_ranks = ranks->size();
   }
   start.ic = io::read_initial_conditions(ic_path, read_options);
+  if (ranks && start.ic.dm.size() > 0) {
+    // Collisionless particles (read whole by every rank) keep every particle on every rank:
+    // the gas is read again, whole.
+    ranks.reset();
+    read_options.share_rank = 0;
+    read_options.share_ranks = 1;
+    start.ic = io::read_initial_conditions(ic_path, read_options);
+  }
   if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}};
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.

@@ -104,10 +104,11 @@ struct CellUpdate {
   }
 };
 
-// The gas fields that a step of a run without gravity and star formation changes other than
-// by the drift (which every rank holding a copy repeats alike). The rest stay as they are
-// between recuts in such a run: identity and masses (and the star formation fields) do not
-// change, positions change by the drift alone, and gravity's fields are unused. Which field
+// The gas fields that a step of a run in halo mode (no star formation, no periodic gravity)
+// changes other than by the drift (which every rank holding a copy repeats alike), and, with
+// gravity, halo_gravity_fields. The rest stay as they are between recuts in such a run, or no
+// holder reads them: identity and masses (and the star formation fields) do not change,
+// positions change by the drift alone, the potential is read only of own particles. Which field
 // travels where is a column of the table of particle fields (particles/ParticleFields.hpp;
 // a test checks that each gas field is sent, derived or known not to change).
 // They are the ghost's results (ghost_fields, which a ghost message carries whole for the
@@ -134,15 +135,21 @@ void halo_step_fields(GasParticles& g, F&& f) {
   step_fields_after_ghost(g, f);
 }
 
+template <class F>
+void halo_gravity_fields(GasParticles& g, F&& f) {
+  for_each_field_in(g, message::halo_gravity, f);
+}
+
 // The halo_step_fields of leaf c's gas particles flagged in `moved`, without the cell's
 // record: what its owner's tasks changed, for the ranks that hold a copy. A rank that had
 // the leaf's ghost results in this graph (its send/recv) has the ghost_fields already, as
 // they stand at the end of the graph (nothing after the ghost writes them, up to the next
 // drift): `ghost_results_sent` then leaves them out.
+// With `gravity`, the halo_gravity_fields too.
 void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                    bool ghost_results_sent = false);
+                    bool ghost_results_sent = false, bool gravity = false);
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                      bool ghost_results_sent = false);
+                      bool ghost_results_sent = false, bool gravity = false);
 
 // Every field of the gas particles at `indices` (in that order).
 void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);

@@ -102,10 +102,11 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
   // Each rank builds the tree of its own leaves' particles and assembles each step's tree
   // from it and what the other ranks send for its walks (docs/gravity.md, "Across ranks").
-  if (ranks_ && config_.gravity.enabled && config_.assemble_gravity_tree && !layout_.halo_mode()) {
+  if (ranks_ && config_.gravity.enabled && (config_.assemble_gravity_tree || layout_.halo_mode())) {
     tree_messages_ = std::make_unique<TreeMessagesOverRanks>(*ranks_);
     ctx_->tree_messages = tree_messages_.get();
     ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
+    if (layout_.halo_mode()) ctx_->leaf_places = &run_first_;
   }
   if (config_.star_formation.enabled) setup_star_formation();
   if (config_.comoving.enabled) setup_comoving();
@@ -368,12 +369,11 @@ void Engine::rebuild() {
   }
   ctx_->cover_exceeded = false;
   if (config_.gravity.enabled && ctx_->tree_messages) {
-    // Across ranks the tree's build is a collective: on this thread, after the lists'.
+    // Across ranks the tree's build is a collective: on this thread, after the lists' (and in
+    // halo mode after the holders' copies, which put each leaf's particles in place).
     find_neighbour_lists(for_each);
     share_neighbour_lists();
-    gravity::build_tree(*ctx_);
     build_graph();
-    ctx_->tree_current = true;
   } else if (config_.gravity.enabled) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
     // beside the neighbour lists and the graph, which read only the cells, rather than in
@@ -398,6 +398,10 @@ void Engine::rebuild() {
     layout_.find_holders(space_);
     hold_leaves();
     recut_bytes_ += ranks_->traffic().bytes - bytes_before;
+  }
+  if (config_.gravity.enabled && ctx_->tree_messages) {
+    gravity::build_tree(*ctx_);
+    ctx_->tree_current = true;
   }
   rebuild_pending_ = false;
   rebuild_s_ += seconds_since(t_rebuild);

@@ -81,9 +81,11 @@ struct RunConfig {
   // h-scaled units (Mpc/h, Msun/h) divided by h (what cooling and star formation convert with).
   Units physical_units() const;
   // Across MPI ranks, whether each rank holds only its own particles and their neighbours
-  // (halo mode): runs without gravity, which reads every particle, and without star formation,
-  // whose spawning and feedback change particles anywhere. Such a run reads its gas in shares.
-  bool ranks_hold_shares() const { return !gravity.enabled && !star_formation.enabled; }
+  // (halo mode): runs without star formation, whose spawning and feedback change particles
+  // anywhere, and without the periodic mesh, which is fed every particle (gravity with open
+  // boundaries assembles each rank's tree from the others' parts). Such a run reads its gas in
+  // shares; one with collisionless particles keeps every particle everywhere after all.
+  bool ranks_hold_shares() const { return !star_formation.enabled && !(gravity.enabled && space.periodic); }
 
   // Reads and cross-checks the parameters (the start time is run.t_begin, given or default).
   static RunConfig from(const ParameterFile& p);

@@ -59,8 +59,10 @@ void leaf_targets(const StepContext& ctx, int c, LeafTargets& out) {
 }
 
 // This rank's sources across ranks: the particles of the leaves it owns, gas and then dark
-// matter, each in the arrays' order (the run's, as every rank holds every particle), named
-// by their index among one rank's sources.
+// matter, each in the run's order, named by their index in this rank's arrays (as the walks'
+// targets name them). Where the arrays hold only some leaves (halo mode, gas only) a
+// particle's place in the run is its leaf's place plus its offset in the leaf; otherwise its
+// index.
 struct OwnSources {
   std::vector<Vec3> x;
   std::vector<double> m, eps;
@@ -71,29 +73,32 @@ struct OwnSources {
 OwnSources own_sources(const StepContext& ctx) {
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
-  std::vector<std::size_t> g, d;
+  std::vector<std::pair<std::uint64_t, std::size_t>> g;  // (place, index)
+  std::vector<std::size_t> d;
   for (const int c : ctx.space.leaves()) {
     if (!ctx.owns_leaf(c)) continue;
     const Cell& cell = ctx.space.cell(c);
-    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) g.push_back(i);
+    const std::size_t first = ctx.leaf_places ? (*ctx.leaf_places)[static_cast<std::size_t>(c)] : cell.first;
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) g.emplace_back(first + (i - cell.first), i);
     for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) d.push_back(i);
   }
   std::sort(g.begin(), g.end());
   std::sort(d.begin(), d.end());
   OwnSources s;
-  for (const std::size_t i : g) {
+  for (const auto& [place, i] : g) {
     s.x.push_back(gas.x[i]);
     s.m.push_back(gas.dynamical_mass(i));
     s.eps.push_back(ctx.softening_gas());
-    s.places.push_back(i);
+    s.places.push_back(place);
+    s.names.push_back(static_cast<std::int32_t>(i));
   }
   for (const std::size_t i : d) {
     s.x.push_back(dm.x[i]);
     s.m.push_back(dm.mass[i]);
     s.eps.push_back(ctx.softening_of(i));
     s.places.push_back(gas.size() + i);
+    s.names.push_back(static_cast<std::int32_t>(gas.size() + i));
   }
-  for (const std::uint64_t p : s.places) s.names.push_back(static_cast<std::int32_t>(p));
   return s;
 }
 }  // namespace
@@ -185,7 +190,9 @@ void finish_tree(StepContext& ctx) {
   if (ctx.tree_messages) {
     // Across ranks: this rank's subtrees refitted (or all built anew), then the tree for the
     // step's walks of its own leaves' active particles, assembled with what the other ranks
-    // send for them (every step: the walks and the moments change).
+    // send for them (every step: the walks and the moments change). The last step's goes
+    // first, so that two are never held at once.
+    ctx.tree.reset();
     if (ctx.tree_update == StepContext::TreeUpdate::refit)
       ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
     else if (ctx.tree_update == StepContext::TreeUpdate::build)

@@ -91,6 +91,7 @@ class TreeAssembler {
     build_top();
     build_own_subtrees();
     gather_small_nodes(true);
+    keep_gathered_members();
   }
 
   void refit(TreeMessages& ranks, const RankSources& mine) {
@@ -306,6 +307,25 @@ class TreeAssembler {
 
   std::int32_t name(std::int32_t i) const { return mine_.names.empty() ? i : mine_.names[static_cast<std::size_t>(i)]; }
 
+  // This rank's k-th source in the top's order: items_ while the top is built, then (for the
+  // gathered nodes' refits) the compact list that replaces it.
+  std::int32_t member(std::int32_t k) const {
+    return items_.empty() ? gathered_members_[static_cast<std::size_t>(k)] : items_[static_cast<std::size_t>(k)].index;
+  }
+
+  // Once built, only the gathered nodes need this rank's sources by the top's order: their
+  // list replaces the sort's arrays (32 B a source each).
+  void keep_gathered_members() {
+    for (TopNode& node : top_) {
+      if (node.kind != Kind::gathered) continue;
+      const auto first = static_cast<std::int32_t>(gathered_members_.size());
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) gathered_members_.push_back(member(k));
+      node.first = first;
+    }
+    items_ = {};
+    scratch_ = {};
+  }
+
   SourceRecord record(std::int32_t i) const {
     const auto u = static_cast<std::size_t>(i);
     return {mine_.positions[u], mine_.masses[u], mine_.softenings[u], mine_.places[u]};
@@ -338,8 +358,7 @@ class TreeAssembler {
     for (const TopNode& node : top_) {
       if (node.kind != Kind::gathered) continue;
       put(message, static_cast<std::int64_t>(node.count));
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k)
-        put(message, record(items_[static_cast<std::size_t>(k)].index));
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) put(message, record(member(k)));
     }
     const auto all = ranks_->allgather(message);
     std::vector<Reader> in;
@@ -363,7 +382,7 @@ class TreeAssembler {
         if (r == ranks_->rank())  // this rank's own keep their index
           for (std::int32_t k = 0; k < node.count; ++k)
             arrivals[arrivals.size() - static_cast<std::size_t>(node.count) + static_cast<std::size_t>(k)].index =
-                name(items_[static_cast<std::size_t>(node.first + k)].index);
+                name(member(node.first + k));
       }
       std::sort(arrivals.begin(), arrivals.end(),
                 [](const Arrival& a, const Arrival& b) { return a.source.place < b.source.place; });
@@ -644,6 +663,7 @@ class TreeAssembler {
   std::int64_t gather_limit_ = 0;
   GravityTree::Cube cube_;
   std::vector<GravityTree::SortItem> items_, scratch_;
+  std::vector<std::int32_t> gathered_members_;
   std::vector<TopNode> top_;
   std::vector<Part> own_, gathered_;
   std::vector<std::vector<char>> received_;

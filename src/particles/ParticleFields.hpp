@@ -144,7 +144,7 @@ inline constexpr auto kGasFields = [] {
     // Gravity.
     field(&G::a_grav, {.key = "a_grav", .name = "GravAcceleration", .units = kAcceleration,
                        .description = "Gravitational accelerations of the particles at the last force computation (0 without gravity)",
-                       .snapshot = always, .messages = kStepped}),
+                       .snapshot = always, .messages = kStepped | halo_gravity}),
     field(&G::potential, {.key = "potential", .name = "Potential", .units = kPotential,
                           .description = "Specific gravitational potentials of the particles at the last force computation (0 without gravity)",
                           .snapshot = always, .messages = kStepped}),

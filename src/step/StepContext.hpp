@@ -5,6 +5,7 @@
 #include <limits>
 
 #include <memory>
+#include <vector>
 
 #include "core/ForEach.hpp"
 #include "particles/CollisionlessParticles.hpp"
@@ -59,6 +60,9 @@ struct StepContext {
   gravity::TreeMessages* tree_messages = nullptr;
   // Whether this rank owns leaf c (its tasks run here); every leaf when alone.
   std::function<bool(int)> owns_leaf = [](int) { return true; };
+  // Where each cell's gas starts in the run's order, where this rank's arrays hold only some
+  // leaves (halo mode); null when they hold every particle in the run's order.
+  const std::vector<std::size_t>* leaf_places = nullptr;
   // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
   enum class TreeUpdate { keep, refit, build };
   TreeUpdate tree_update = TreeUpdate::build;
