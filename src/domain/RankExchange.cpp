@@ -271,6 +271,7 @@ void RankExchange::release_buffers() {
   std::vector<char>().swap(gathered_);
   std::vector<char>().swap(scattered_);
   std::vector<char>().swap(sending_);
+  Buffer().swap(received_);
 }
 
 RankExchange::Traffic RankExchange::traffic() const {

@@ -76,8 +76,8 @@ class RankExchange {
     std::uint64_t point_to_point_bytes = 0;  // of which by post_send (the rest by collectives)
   };
   Traffic traffic() const;
-  // Frees the buffers the collectives keep for reuse (after an exchange far larger than the
-  // run's usual ones, which would otherwise hold its memory to the end).
+  // Frees the buffers the collectives and receive() keep for reuse (after an exchange far
+  // larger than the run's usual ones, which would otherwise hold its memory to the end).
   void release_buffers();
   void reset_traffic();
 

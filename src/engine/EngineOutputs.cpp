@@ -54,6 +54,8 @@ void Engine::stream_gas(const StatePiece<GasParticles>& consume) {
         left -= n;
       }
     }
+    // An output's messages are far larger than a step's: their buffer goes with them.
+    ranks_->release_buffers();
   } else {
     std::vector<char> buffer;
     for (const OwnedRun& run : runs) {

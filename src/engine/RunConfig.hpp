@@ -25,7 +25,7 @@ struct OutputConfig {
   bool dump_task_graph = false;
   long long dump_timeline_every = 0;
   long long statistics_every = 0;
-  std::size_t gather_particles = 65536;  // across ranks: particles per message to rank 0 for its outputs
+  std::size_t gather_particles = 8192;  // across ranks: particles per message to rank 0 for its outputs
   bool fof_groups = false, hop_groups = false;  // comoving runs: catalogues beside each snapshot
 };
 
