@@ -103,6 +103,10 @@ OwnSources own_sources(const StepContext& ctx) {
 }
 }  // namespace
 
+const GravityTree& walk_tree(const StepContext& ctx) {
+  return ctx.tree_across ? ctx.tree_across->last_tree() : *ctx.tree;
+}
+
 void build_tree(StepContext& ctx) {
   if (ctx.tree_messages) {
     const OwnSources own = own_sources(ctx);
@@ -190,9 +194,7 @@ void finish_tree(StepContext& ctx) {
   if (ctx.tree_messages) {
     // Across ranks: this rank's subtrees refitted (or all built anew), then the tree for the
     // step's walks of its own leaves' active particles, assembled with what the other ranks
-    // send for them (every step: the walks and the moments change). The last step's goes
-    // first, so that two are never held at once.
-    ctx.tree.reset();
+    // send for them (every step: the walks and the moments change).
     if (ctx.tree_update == StepContext::TreeUpdate::refit)
       ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
     else if (ctx.tree_update == StepContext::TreeUpdate::build)
@@ -206,7 +208,7 @@ void finish_tree(StepContext& ctx) {
     }
     std::vector<TargetBatch> batches;
     for (const LeafTargets& l : leaves) batches.push_back({l.targets});
-    ctx.tree = std::make_unique<GravityTree>(ctx.tree_across->tree_for(*ctx.tree_messages, batches));
+    ctx.tree_across->tree_for(*ctx.tree_messages, batches);  // what walk_tree() gives the walks
     return;
   }
   if (ctx.tree_update == StepContext::TreeUpdate::refit) ctx.tree->finish_refit();
@@ -226,7 +228,7 @@ void walk_cell(StepContext& ctx, int c) {
   std::vector<GravityResult> results(targets.size());
   // More than two groups: idle threads may take some.
   const bool split = targets.size() > 2 * static_cast<std::size_t>(GravityTree::group_size(config));
-  ctx.tree->accelerate(targets, config, results, split ? ctx.in_task_for_each : ForEach{});
+  walk_tree(ctx).accelerate(targets, config, results, split ? ctx.in_task_for_each : ForEach{});
   std::size_t k = 0;
   for (const std::size_t i : gas_targets) {
     gas.a_grav[i] = results[k].acceleration;

@@ -4,11 +4,15 @@
 
 namespace fountain::gravity {
 
+class GravityTree;
+
 // The tree's sources are every particle at its drifted position: gas (its gravitating mass,
 // at the gas softening) and dark matter, numbered gas first, then dark matter.
 
-// Builds ctx.tree anew from every particle.
+// Builds ctx.tree anew from every particle (across ranks: ctx.tree_across, from this rank's).
 void build_tree(StepContext& ctx);
+// The tree the step's walks read: ctx.tree, or across ranks the one the tree task assembled.
+const GravityTree& walk_tree(const StepContext& ctx);
 
 // Chooses, before a graph run, what its tree tasks do (ctx.tree_update): nothing when the
 // tree was built at this step's rebuild; a refit while the tree has the same sources in the

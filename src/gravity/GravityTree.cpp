@@ -267,9 +267,10 @@ bool GravityTree::node_moments(std::int32_t n) {
     if (node.count == 0) node.min_softening = 0.0;
     return node.side > 2.0 * node.built_side;
   }
-  const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(nodes_.size()) : node.next;
+  // The last child's `next` is its parent's (a tree assembled across ranks keeps some subtrees
+  // apart from the preorder of the array, so the children are found by the links alone).
   bool grown = false;
-  for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
+  for (std::int32_t c = node.first_child; c >= 0 && c != node.next; c = nodes_[c].next) {
     const TreeNode& child = nodes_[c];
     node.mass += child.mass;
     weighted += child.mass * child.com;
@@ -282,7 +283,7 @@ bool GravityTree::node_moments(std::int32_t n) {
   // The margin covers the rounding of the sum above: a larger cube only opens more.
   if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
   node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
-  for (std::int32_t c = node.first_child; c >= 0 && c < end; c = nodes_[c].next) {
+  for (std::int32_t c = node.first_child; c >= 0 && c != node.next; c = nodes_[c].next) {
     const TreeNode& child = nodes_[c];
     for (int m = 0; m < 6; ++m) q[m] += child.quadrupole[m];
     const Vec3 s = child.com - node.com;

@@ -80,18 +80,26 @@ class TreeAssembler {
  public:
   TreeAssembler(TreeMessages& ranks, const RankSources& mine, const TreeConfig& tree_config,
                 const WalkConfig& walk_config)
-      : tree_config_(tree_config), walk_config_(walk_config) {
+      : tree_config_(tree_config), walk_config_(walk_config), tree_(tree_config) {
     check(mine);
     ranks_ = &ranks;
     mine_ = mine;
     gather_limit_ = std::max<std::int64_t>(tree_config.max_leaf_size,
                                            walk_config.split.enabled() ? GravityTree::kDirectNodeSize : 0);
+    tree_.across_ranks_ = true;
     has_sources_ = find_cube();
     if (!has_sources_) return;
+    tree_.length_unit_ = std::ldexp(1.0, std::ilogb(cube_.side));
     build_top();
+    // The walks start at node 0: the root's place, unless the root is a block built here.
+    const TopNode& root = top_[0];
+    if (root.kind == Kind::internal || (root.kind == Kind::held && root.owner != ranks_->rank()))
+      tree_.nodes_.emplace_back();
     build_own_subtrees();
     gather_small_nodes(true);
     keep_gathered_members();
+    prefix_nodes_ = tree_.nodes_.size();
+    prefix_sources_ = tree_.pos_.size();
   }
 
   void refit(TreeMessages& ranks, const RankSources& mine) {
@@ -103,17 +111,13 @@ class TreeAssembler {
     mine_ = mine;
     if (!has_sources_) return;
     bool loose = false;
-    for (Part& part : own_) {
-      std::vector<Vec3> x;
-      std::vector<double> m, eps;
-      for (const std::int32_t i : part.members) {
-        const auto u = static_cast<std::size_t>(i);
-        x.push_back(mine.positions[u]);
-        m.push_back(mine.masses[u]);
-        eps.push_back(mine.softenings[u]);
+    for (const Block& block : own_blocks_) {
+      for (std::int32_t k = 0; k < block.sources; ++k) {
+        const std::int32_t at = block.first + k;
+        tree_.store_source(at, tree_.index_[static_cast<std::size_t>(at)],
+                           source(block.source_of[static_cast<std::size_t>(k)]));
       }
-      part.tree.refit(x, m, eps);
-      loose = loose || part.tree.loose();
+      loose = block_moments(block) || loose;
     }
     loose_ = loose;
     gather_small_nodes(false);
@@ -121,17 +125,17 @@ class TreeAssembler {
 
   bool loose() const { return loose_; }
   const TreeAcrossRanksCounts& counts() const { return counts_; }
+  const GravityTree& last_tree() const { return tree_; }
 
-  GravityTree tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches) {
+  const GravityTree& tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches) {
     ranks_ = &ranks;
     batches_ = batches;
-    GravityTree tree(tree_config_);
-    if (!has_sources_) return tree;
+    if (!has_sources_) return tree_;
     counts_.nodes_sent = counts_.sources_sent = counts_.nodes_received = counts_.sources_received = 0;
     counts_.bytes_sent = counts_.top_nodes = 0;
     exchange_essential_parts();
-    assemble(tree);
-    return tree;
+    assemble();
+    return tree_;
   }
 
  private:
@@ -144,16 +148,21 @@ class TreeAssembler {
     int owner = -1;                   // held: the rank whose sources alone it holds
     std::int32_t first = 0, count = 0;  // this rank's sources in it: items_[first, first + count)
     std::array<std::int32_t, 8> child{-1, -1, -1, -1, -1, -1, -1, -1};
-    std::int32_t part = -1;  // held by this rank: own_[part]; gathered: gathered_[part]
+    std::int32_t part = -1;  // held by this rank: own_blocks_[part]; gathered: gathered_blocks_[part]
   };
   struct Exported {
     TreeNode node;
     std::int32_t subtree = 1;  // exported nodes in its subtree, itself included
   };
-  struct Part {  // a subtree built here, and its sources' indices in the assembled tree
-    GravityTree tree;
-    std::vector<std::int32_t> index;
-    std::vector<std::int32_t> members;  // this rank's own: its sources, in the subtree's numbering
+  // A subtree built here (this rank's own, or a gathered node), kept in the tree's first
+  // nodes and sources from one build to the next: its nodes [root, root + nodes), its sources
+  // [first, first + sources). `exits`: its nodes whose `next` leaves it (its right edge), set
+  // to wherever the top's preorder goes after it at each assembly. `source_of`: for each of its
+  // sources in tree order, this rank's index of it (own) or its rank in the run's order among
+  // the node's sources (gathered), for the refits.
+  struct Block {
+    std::int32_t root = 0, nodes = 0, first = 0, sources = 0;
+    std::vector<std::int32_t> exits, source_of;
   };
 
   static void check(const RankSources& mine) {
@@ -289,8 +298,11 @@ class TreeAssembler {
     }
   }
 
-  // A subtree of the given sources (in the run's order) at top node t.
-  Part subtree(const TopNode& node, const std::vector<SourceRecord>& sources, std::vector<std::int32_t> index) {
+  // The subtree of these sources (in the run's order) at top node `node`, built as one rank
+  // builds it, appended to the tree's kept part. `names[j]`: the index source j takes in the
+  // tree; `keys[j]`: what its block remembers of it (Block::source_of).
+  Block place_block(const TopNode& node, const std::vector<SourceRecord>& sources, const std::vector<std::int32_t>& names,
+                    const std::vector<std::int32_t>& keys) {
     std::vector<Vec3> x(sources.size());
     std::vector<double> m(sources.size()), eps(sources.size());
     for (std::size_t k = 0; k < sources.size(); ++k) {
@@ -298,11 +310,56 @@ class TreeAssembler {
       m[k] = sources[k].mass;
       eps[k] = sources[k].softening;
     }
-    Part part{GravityTree(x, m, eps, tree_config_, node.cube, node.depth), {}, {}};
-    part.index.resize(part.tree.index_.size());
-    for (std::size_t k = 0; k < part.index.size(); ++k)
-      part.index[k] = index[static_cast<std::size_t>(part.tree.index_[k])];
-    return part;
+    const GravityTree sub(x, m, eps, tree_config_, node.cube, node.depth);
+    Block block;
+    block.root = static_cast<std::int32_t>(tree_.nodes_.size());
+    block.nodes = static_cast<std::int32_t>(sub.nodes_.size());
+    block.first = static_cast<std::int32_t>(tree_.pos_.size());
+    block.sources = static_cast<std::int32_t>(sub.pos_.size());
+    for (std::size_t n = 0; n < sub.nodes_.size(); ++n) {
+      TreeNode copy = sub.nodes_[n];
+      copy.first += block.first;
+      if (copy.first_child >= 0) copy.first_child += block.root;
+      if (copy.next < 0) {
+        block.exits.push_back(block.root + static_cast<std::int32_t>(n));
+      } else {
+        copy.next += block.root;
+      }
+      tree_.nodes_.push_back(copy);
+    }
+    for (std::size_t k = 0; k < sub.pos_.size(); ++k) {
+      const auto j = static_cast<std::size_t>(sub.index_[k]);
+      tree_.index_.push_back(names[j]);
+      block.source_of.push_back(keys[j]);
+    }
+    grow_sources(tree_.pos_.size() + sub.pos_.size());
+    for (std::size_t k = 0; k < sub.pos_.size(); ++k) {
+      const auto at = static_cast<std::size_t>(block.first) + k;
+      tree_.store_source(static_cast<std::int32_t>(at), tree_.index_[at], {sub.pos_[k], sub.mass_[k], sub.eps_[k]});
+    }
+    return block;
+  }
+
+  void grow_sources(std::size_t n) {
+    tree_.pos_.resize(n);
+    tree_.mass_.resize(n);
+    tree_.spline_.resize(n);
+    tree_.spline_f_.resize(n);
+    tree_.spline_inv_f_.resize(n);
+    tree_.eps_.resize(n);
+  }
+
+  // A block's moments from its sources, from the leaves up (GravityTree's refit); true if
+  // some cube grew past twice its built side.
+  bool block_moments(const Block& block) {
+    bool loose = false;
+    for (std::int32_t n = block.root + block.nodes - 1; n >= block.root; --n) loose = tree_.node_moments(n) || loose;
+    return loose;
+  }
+
+  GravityTree::RefitSource source(std::int32_t i) const {
+    const auto u = static_cast<std::size_t>(i);
+    return {mine_.positions[u], mine_.masses[u], mine_.softenings[u]};
   }
 
   std::int32_t name(std::int32_t i) const { return mine_.names.empty() ? i : mine_.names[static_cast<std::size_t>(i)]; }
@@ -335,17 +392,16 @@ class TreeAssembler {
     for (TopNode& node : top_) {
       if (node.kind != Kind::held || node.owner != ranks_->rank()) continue;
       std::vector<SourceRecord> sources;
-      std::vector<std::int32_t> index, members;
+      std::vector<std::int32_t> names, locals;
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const std::int32_t i = items_[static_cast<std::size_t>(k)].index;
         sources.push_back(record(i));
-        index.push_back(name(i));
-        members.push_back(i);
+        names.push_back(name(i));
+        locals.push_back(i);
       }
-      node.part = static_cast<std::int32_t>(own_.size());
-      own_.push_back(subtree(node, sources, std::move(index)));
-      own_.back().members = std::move(members);
-      counts_.own_subtrees += static_cast<std::int64_t>(own_.back().tree.nodes_.size());
+      node.part = static_cast<std::int32_t>(own_blocks_.size());
+      own_blocks_.push_back(place_block(node, sources, names, locals));
+      counts_.own_subtrees += own_blocks_.back().nodes;
     }
   }
 
@@ -389,26 +445,24 @@ class TreeAssembler {
       if (static_cast<std::int64_t>(arrivals.size()) != node.total)
         throw std::logic_error("assemble_tree_across_ranks: the ranks disagree on a node's sources");
       if (!build) {
-        Part& part = gathered_[static_cast<std::size_t>(node.part)];
-        std::vector<Vec3> x;
-        std::vector<double> m, eps;
-        for (const Arrival& a : arrivals) {
-          x.push_back(a.source.x);
-          m.push_back(a.source.mass);
-          eps.push_back(a.source.softening);
+        const Block& block = gathered_blocks_[static_cast<std::size_t>(node.part)];
+        for (std::int32_t k = 0; k < block.sources; ++k) {
+          const std::int32_t at = block.first + k;
+          const SourceRecord& a = arrivals[static_cast<std::size_t>(block.source_of[static_cast<std::size_t>(k)])].source;
+          tree_.store_source(at, tree_.index_[static_cast<std::size_t>(at)], {a.x, a.mass, a.softening});
         }
-        part.tree.refit(x, m, eps);
-        loose_ = loose_ || part.tree.loose();
+        loose_ = block_moments(block) || loose_;
         continue;
       }
       std::vector<SourceRecord> sources;
-      std::vector<std::int32_t> index;
-      for (const Arrival& a : arrivals) {
-        sources.push_back(a.source);
-        index.push_back(a.index);
+      std::vector<std::int32_t> names, ranks_in_order;
+      for (std::size_t k = 0; k < arrivals.size(); ++k) {
+        sources.push_back(arrivals[k].source);
+        names.push_back(arrivals[k].index);
+        ranks_in_order.push_back(static_cast<std::int32_t>(k));
       }
-      node.part = static_cast<std::int32_t>(gathered_.size());
-      gathered_.push_back(subtree(node, sources, std::move(index)));
+      node.part = static_cast<std::int32_t>(gathered_blocks_.size());
+      gathered_blocks_.push_back(place_block(node, sources, names, ranks_in_order));
       ++counts_.gathered_nodes;
     }
   }
@@ -480,13 +534,13 @@ class TreeAssembler {
   // What of one held subtree the walks of `groups` may visit, in preorder: a node every group
   // passes by or accepts goes without its inside; one some group opens, with its children; one
   // some group lists, with its sources.
-  void export_subtree(const GravityTree& sub, const std::vector<GravityTree::Group>& groups,
-                      const GravityTree::WalkRules& rules, std::vector<char>& message) {
+  void export_block(const Block& block, const std::vector<GravityTree::Group>& groups,
+                    const GravityTree::WalkRules& rules, std::vector<char>& message) {
     std::vector<Exported> nodes;
     std::vector<SourceRecord> sources;
     std::vector<std::int32_t> all(groups.size());
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
-    export_node(sub, 0, groups, all, rules, nodes, sources);
+    export_node(block.root, groups, all, rules, nodes, sources);
     put(message, static_cast<std::int64_t>(nodes.size()));
     put(message, static_cast<std::int64_t>(sources.size()));
     for (const Exported& e : nodes) put(message, e);
@@ -495,17 +549,16 @@ class TreeAssembler {
     counts_.sources_sent += static_cast<std::int64_t>(sources.size());
   }
 
-  void export_node(const GravityTree& sub, std::int32_t n, const std::vector<GravityTree::Group>& groups,
-                   const std::vector<std::int32_t>& active, const GravityTree::WalkRules& rules,
-                   std::vector<Exported>& nodes, std::vector<SourceRecord>& sources) {
-    const TreeNode& node = sub.nodes_[static_cast<std::size_t>(n)];
+  void export_node(std::int32_t n, const std::vector<GravityTree::Group>& groups, const std::vector<std::int32_t>& active,
+                   const GravityTree::WalkRules& rules, std::vector<Exported>& nodes, std::vector<SourceRecord>& sources) {
+    const TreeNode& node = tree_.nodes_[static_cast<std::size_t>(n)];
     const std::size_t at = nodes.size();
     nodes.push_back({node, 1});
     std::vector<std::int32_t> opening;
     bool listed = false;
     GravityTree::NodeOffsets o;
     for (const std::int32_t k : active) {
-      switch (sub.decide(node, groups[static_cast<std::size_t>(k)], walk_config_, rules, o)) {
+      switch (tree_.decide(node, groups[static_cast<std::size_t>(k)], walk_config_, rules, o)) {
         case GravityTree::Visit::open:
           opening.push_back(k);
           break;
@@ -513,21 +566,21 @@ class TreeAssembler {
           listed = true;
           break;
         case GravityTree::Visit::pruned:
-          throw std::logic_error("assemble_tree_across_ranks: a rank's own subtree has a pruned node");
+          throw std::logic_error("TreeAcrossRanks: a rank's own subtree has a pruned node");
         default:
           break;
       }
     }
     if (!opening.empty()) {
-      const std::int32_t end = node.next < 0 ? static_cast<std::int32_t>(sub.nodes_.size()) : node.next;
-      for (std::int32_t c = node.first_child; c >= 0 && c < end; c = sub.nodes_[static_cast<std::size_t>(c)].next)
-        export_node(sub, c, groups, opening, rules, nodes, sources);
+      // The last child's `next` is its parent's.
+      for (std::int32_t c = node.first_child; c >= 0 && c != node.next; c = tree_.nodes_[static_cast<std::size_t>(c)].next)
+        export_node(c, groups, opening, rules, nodes, sources);
     } else if (listed) {
       nodes[at].node.first_child = -1;
       nodes[at].node.first = static_cast<std::int32_t>(sources.size());
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const auto u = static_cast<std::size_t>(k);
-        sources.push_back({sub.pos_[u], sub.mass_[u], sub.eps_[u], 0});
+        sources.push_back({tree_.pos_[u], tree_.mass_[u], tree_.eps_[u], 0});
       }
     } else {
       nodes[at].node.first_child = TreeNode::kPruned;
@@ -558,99 +611,114 @@ class TreeAssembler {
       for (const std::int32_t t : preorder()) {
         const TopNode& node = top_[static_cast<std::size_t>(t)];
         if (node.kind == Kind::held && node.owner == ranks_->rank())
-          export_subtree(own_[static_cast<std::size_t>(node.part)].tree, groups, rules, out);
+          export_block(own_blocks_[static_cast<std::size_t>(node.part)], groups, rules, out);
       }
       counts_.bytes_sent += static_cast<std::int64_t>(out.size());
     }
     received_ = ranks_->alltoall(to);
   }
 
-  // The tree in preorder: the top's nodes, this rank's subtrees, the gathered ones, and
-  // other ranks' parts as they sent them; then the top's moments from the leaves up.
-  void assemble(GravityTree& tree) {
-    tree.across_ranks_ = true;
-    tree.length_unit_ = std::ldexp(1.0, std::ilogb(cube_.side));
+  // The tree for this step's walks. Its first nodes and sources stay from the build: this
+  // rank's own subtrees and the gathered ones (refitted in place). After them come, anew each
+  // time, the top's nodes and the parts other ranks sent. The walk follows the links, not the
+  // array order, so the links make the top's preorder: each node's `next` is where the preorder
+  // goes after its subtree; then the top's moments are summed from the leaves up.
+  void assemble() {
+    tree_.nodes_.resize(prefix_nodes_);
+    tree_.index_.resize(prefix_sources_);
+    grow_sources(prefix_sources_);
     std::vector<Reader> in;
     for (const auto& m : received_) in.emplace_back(m);
+    const std::vector<std::int32_t> order = preorder();
+    // Where each top node's subtree starts, and (received parts) its extent in the array.
+    std::vector<std::int32_t> entry(top_.size(), -1), part_end(top_.size(), -1);
     std::vector<std::int32_t> top_internal;
-    std::vector<SourceRecord> sources;
-    std::vector<std::int32_t> index;
-    auto splice = [&](const GravityTree& sub, const std::vector<std::int32_t>& sub_index) {
-      const auto base = static_cast<std::int32_t>(tree.nodes_.size());
-      const auto first = static_cast<std::int32_t>(sources.size());
-      const auto end = base + static_cast<std::int32_t>(sub.nodes_.size());
-      for (TreeNode node : sub.nodes_) {
-        node.first += first;
-        if (node.first_child >= 0) node.first_child += base;
-        node.next = node.next < 0 ? end : node.next + base;
-        tree.nodes_.push_back(node);
-      }
-      for (std::size_t k = 0; k < sub.pos_.size(); ++k) {
-        sources.push_back({sub.pos_[k], sub.mass_[k], sub.eps_[k], 0});
-        index.push_back(sub_index[k]);
-      }
-    };
-    auto append = [&](auto&& self, std::int32_t t) -> void {
+    for (const std::int32_t t : order) {
       const TopNode& top = top_[static_cast<std::size_t>(t)];
+      const auto here = static_cast<std::int32_t>(tree_.nodes_.size());
       if (top.kind == Kind::internal) {
-        const auto at = static_cast<std::int32_t>(tree.nodes_.size());
         TreeNode node;
         node.centre = top.cube.centre;
         node.side = node.built_side = top.cube.side;
         node.count = static_cast<std::int32_t>(top.total);
-        node.first = static_cast<std::int32_t>(sources.size());
-        node.first_child = at + 1;
-        tree.nodes_.push_back(node);
+        const std::int32_t at = t == 0 ? 0 : here;  // the root in its kept place
+        if (t == 0)
+          tree_.nodes_[0] = node;
+        else
+          tree_.nodes_.push_back(node);
+        entry[static_cast<std::size_t>(t)] = at;
         top_internal.push_back(at);
         ++counts_.top_nodes;
-        for (const std::int32_t c : top.child)
-          if (c >= 0) self(self, c);
-        tree.nodes_[static_cast<std::size_t>(at)].next = static_cast<std::int32_t>(tree.nodes_.size());
       } else if (top.kind == Kind::gathered) {
+        entry[static_cast<std::size_t>(t)] = gathered_blocks_[static_cast<std::size_t>(top.part)].root;
         ++counts_.top_nodes;
-        const Part& part = gathered_[static_cast<std::size_t>(top.part)];
-        splice(part.tree, part.index);
       } else if (top.owner == ranks_->rank()) {
-        const Part& part = own_[static_cast<std::size_t>(top.part)];
-        splice(part.tree, part.index);
+        entry[static_cast<std::size_t>(t)] = own_blocks_[static_cast<std::size_t>(top.part)].root;
       } else {
         Reader& from = in[static_cast<std::size_t>(top.owner)];
         const auto node_count = from.get<std::int64_t>();
         const auto source_count = from.get<std::int64_t>();
-        const auto first = static_cast<std::int32_t>(sources.size());
+        const auto first = static_cast<std::int32_t>(tree_.pos_.size());
         for (std::int64_t k = 0; k < node_count; ++k) {
           const auto e = from.get<Exported>();
           TreeNode node = e.node;
-          const auto here = static_cast<std::int32_t>(tree.nodes_.size());
-          if (node.first_child >= 0) node.first_child = here + 1;
+          const auto at = static_cast<std::int32_t>(tree_.nodes_.size());
+          if (node.first_child >= 0) node.first_child = at + 1;
           if (node.first_child == -1) node.first += first;
-          node.next = here + e.subtree;
-          tree.nodes_.push_back(node);
+          node.next = at + e.subtree;  // here + node_count: the part's end, linked below
+          tree_.nodes_.push_back(node);
         }
+        grow_sources(static_cast<std::size_t>(first) + static_cast<std::size_t>(source_count));
         for (std::int64_t k = 0; k < source_count; ++k) {
-          sources.push_back(from.get<SourceRecord>());
-          index.push_back(kForeignSource);
+          const auto s = from.get<SourceRecord>();
+          tree_.index_.push_back(kForeignSource);
+          tree_.store_source(first + static_cast<std::int32_t>(k), kForeignSource, {s.x, s.mass, s.softening});
         }
+        entry[static_cast<std::size_t>(t)] = here;
+        part_end[static_cast<std::size_t>(t)] = here + static_cast<std::int32_t>(node_count);
         counts_.nodes_received += node_count;
         counts_.sources_received += source_count;
       }
+    }
+    // after[t]: the entry of the node the preorder reaches once t's subtree is done (-1: none).
+    std::vector<std::size_t> subtree_end(top_.size());
+    for (auto k = order.size(); k-- > 0;) {
+      const TopNode& top = top_[static_cast<std::size_t>(order[k])];
+      std::size_t end = k + 1;
+      for (const std::int32_t c : top.child)
+        if (c >= 0) end = std::max(end, subtree_end[static_cast<std::size_t>(c)]);
+      subtree_end[static_cast<std::size_t>(order[k])] = end;
+    }
+    auto after = [&](std::int32_t t) {
+      const std::size_t end = subtree_end[static_cast<std::size_t>(t)];
+      return end < order.size() ? entry[static_cast<std::size_t>(order[end])] : -1;
     };
-    append(append, 0);
-    const auto size = static_cast<std::int32_t>(tree.nodes_.size());
-    for (TreeNode& node : tree.nodes_)
-      if (node.next >= size) node.next = -1;
-
-    const std::size_t n = sources.size();
-    tree.index_ = std::move(index);
-    tree.pos_.resize(n);
-    tree.mass_.resize(n);
-    tree.spline_.resize(n);
-    tree.spline_f_.resize(n);
-    tree.spline_inv_f_.resize(n);
-    tree.eps_.resize(n);
-    for (std::size_t k = 0; k < n; ++k)
-      tree.store_source(static_cast<std::int32_t>(k), tree.index_[k], {sources[k].x, sources[k].mass, sources[k].softening});
-    for (auto t = top_internal.rbegin(); t != top_internal.rend(); ++t) tree.node_moments(*t);
+    for (const std::int32_t t : order) {
+      const TopNode& top = top_[static_cast<std::size_t>(t)];
+      const std::int32_t next = after(t);
+      const std::int32_t at = entry[static_cast<std::size_t>(t)];
+      if (top.kind == Kind::internal) {
+        TreeNode& node = tree_.nodes_[static_cast<std::size_t>(at)];
+        node.next = next;
+        for (const std::int32_t c : top.child)
+          if (c >= 0) {
+            node.first_child = entry[static_cast<std::size_t>(c)];
+            break;
+          }
+      } else if (top.kind == Kind::gathered || top.owner == ranks_->rank()) {
+        const Block& block = top.kind == Kind::gathered ? gathered_blocks_[static_cast<std::size_t>(top.part)]
+                                                        : own_blocks_[static_cast<std::size_t>(top.part)];
+        for (const std::int32_t e : block.exits) tree_.nodes_[static_cast<std::size_t>(e)].next = next;
+      } else {
+        const std::int32_t end = part_end[static_cast<std::size_t>(t)];
+        for (std::int32_t n = at; n < end; ++n)
+          if (tree_.nodes_[static_cast<std::size_t>(n)].next == end) tree_.nodes_[static_cast<std::size_t>(n)].next = next;
+      }
+    }
+    // Another rank's part as the whole tree: its root goes to node 0 (nothing links to it).
+    if (top_[0].kind == Kind::held && top_[0].owner != ranks_->rank())
+      tree_.nodes_[0] = tree_.nodes_[static_cast<std::size_t>(entry[0])];
+    for (auto t = top_internal.rbegin(); t != top_internal.rend(); ++t) tree_.node_moments(*t);
   }
 
   TreeMessages* ranks_ = nullptr;  // the present call's
@@ -665,7 +733,9 @@ class TreeAssembler {
   std::vector<GravityTree::SortItem> items_, scratch_;
   std::vector<std::int32_t> gathered_members_;
   std::vector<TopNode> top_;
-  std::vector<Part> own_, gathered_;
+  GravityTree tree_;  // kept: the own and gathered blocks first, the rest made by each assembly
+  std::vector<Block> own_blocks_, gathered_blocks_;
+  std::size_t prefix_nodes_ = 0, prefix_sources_ = 0;
   std::vector<std::vector<char>> received_;
   TreeAcrossRanksCounts counts_;
 };
@@ -678,9 +748,10 @@ TreeAcrossRanks::TreeAcrossRanks(TreeAcrossRanks&&) noexcept = default;
 TreeAcrossRanks& TreeAcrossRanks::operator=(TreeAcrossRanks&&) noexcept = default;
 void TreeAcrossRanks::refit(TreeMessages& ranks, const RankSources& mine) { impl_->refit(ranks, mine); }
 bool TreeAcrossRanks::loose() const { return impl_->loose(); }
-GravityTree TreeAcrossRanks::tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches) {
+const GravityTree& TreeAcrossRanks::tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches) {
   return impl_->tree_for(ranks, batches);
 }
 const TreeAcrossRanksCounts& TreeAcrossRanks::counts() const { return impl_->counts(); }
+const GravityTree& TreeAcrossRanks::last_tree() const { return impl_->last_tree(); }
 
 }  // namespace fountain::gravity

@@ -83,8 +83,11 @@ class TreeAcrossRanks {
   // Whether some rank's refit grew a node's cube past twice its built side (the same answer
   // on every rank): the caller should build anew, as one rank would.
   bool loose() const;
-  // The tree for walks of these batches' targets.
-  GravityTree tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches);
+  // The tree for walks of these batches' targets, valid until the next call (its own and
+  // gathered subtrees are kept from call to call, the rest is made anew).
+  const GravityTree& tree_for(TreeMessages& ranks, std::span<const TargetBatch> batches);
+  // The tree the last tree_for() made.
+  const GravityTree& last_tree() const;
   // What the last tree_for() held and moved (the topology's counts since the build).
   const TreeAcrossRanksCounts& counts() const;
 
