@@ -91,6 +91,19 @@ class TreeAssembler {
     if (!has_sources_) return;
     tree_.length_unit_ = std::ldexp(1.0, std::ilogb(cube_.side));
     build_top();
+    scratch_ = {};
+    // Room for the kept part at once (GravityTree's estimate of its nodes), rather than by
+    // doubling, which set the peak of a rank's memory here.
+    std::size_t kept = 0;
+    for (const TopNode& node : top_)
+      if (node.kind == Kind::gathered) kept += static_cast<std::size_t>(node.total);
+    kept += mine_.positions.size();
+    tree_.nodes_.reserve(2 * kept / static_cast<std::size_t>(std::max(1, tree_config_.max_leaf_size)) + 16);
+    tree_.index_.reserve(kept);
+    for (auto* v : {&tree_.mass_, &tree_.spline_, &tree_.eps_}) v->reserve(kept);
+    tree_.pos_.reserve(kept);
+    tree_.spline_f_.reserve(kept);
+    tree_.spline_inv_f_.reserve(kept);
     // The walks start at node 0: the root's place, unless the root is a block built here.
     const TopNode& root = top_[0];
     if (root.kind == Kind::internal || (root.kind == Kind::held && root.owner != ranks_->rank()))
@@ -301,16 +314,22 @@ class TreeAssembler {
   // The subtree of these sources (in the run's order) at top node `node`, built as one rank
   // builds it, appended to the tree's kept part. `names[j]`: the index source j takes in the
   // tree; `keys[j]`: what its block remembers of it (Block::source_of).
-  Block place_block(const TopNode& node, const std::vector<SourceRecord>& sources, const std::vector<std::int32_t>& names,
-                    const std::vector<std::int32_t>& keys) {
-    std::vector<Vec3> x(sources.size());
-    std::vector<double> m(sources.size()), eps(sources.size());
-    for (std::size_t k = 0; k < sources.size(); ++k) {
-      x[k] = sources[k].x;
-      m[k] = sources[k].mass;
-      eps[k] = sources[k].softening;
+  struct BlockSources {
+    std::vector<Vec3> x;
+    std::vector<double> m, eps;
+    std::vector<std::int32_t> names, keys;
+    void add(const Vec3& position, double mass, double softening, std::int32_t name, std::int32_t key) {
+      x.push_back(position);
+      m.push_back(mass);
+      eps.push_back(softening);
+      names.push_back(name);
+      keys.push_back(key);
     }
-    const GravityTree sub(x, m, eps, tree_config_, node.cube, node.depth);
+  };
+  Block place_block(const TopNode& node, BlockSources&& in) {
+    const std::vector<std::int32_t> names = std::move(in.names), keys = std::move(in.keys);
+    const GravityTree sub(in.x, in.m, in.eps, tree_config_, node.cube, node.depth);
+    in = {};  // the subtree has its copy
     Block block;
     block.root = static_cast<std::int32_t>(tree_.nodes_.size());
     block.nodes = static_cast<std::int32_t>(sub.nodes_.size());
@@ -391,16 +410,14 @@ class TreeAssembler {
   void build_own_subtrees() {
     for (TopNode& node : top_) {
       if (node.kind != Kind::held || node.owner != ranks_->rank()) continue;
-      std::vector<SourceRecord> sources;
-      std::vector<std::int32_t> names, locals;
+      BlockSources in;
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const std::int32_t i = items_[static_cast<std::size_t>(k)].index;
-        sources.push_back(record(i));
-        names.push_back(name(i));
-        locals.push_back(i);
+        const auto u = static_cast<std::size_t>(i);
+        in.add(mine_.positions[u], mine_.masses[u], mine_.softenings[u], name(i), i);
       }
       node.part = static_cast<std::int32_t>(own_blocks_.size());
-      own_blocks_.push_back(place_block(node, sources, names, locals));
+      own_blocks_.push_back(place_block(node, std::move(in)));
       counts_.own_subtrees += own_blocks_.back().nodes;
     }
   }
@@ -454,15 +471,13 @@ class TreeAssembler {
         loose_ = block_moments(block) || loose_;
         continue;
       }
-      std::vector<SourceRecord> sources;
-      std::vector<std::int32_t> names, ranks_in_order;
+      BlockSources in;
       for (std::size_t k = 0; k < arrivals.size(); ++k) {
-        sources.push_back(arrivals[k].source);
-        names.push_back(arrivals[k].index);
-        ranks_in_order.push_back(static_cast<std::int32_t>(k));
+        const SourceRecord& a = arrivals[k].source;
+        in.add(a.x, a.mass, a.softening, arrivals[k].index, static_cast<std::int32_t>(k));
       }
       node.part = static_cast<std::int32_t>(gathered_blocks_.size());
-      gathered_blocks_.push_back(place_block(node, sources, names, ranks_in_order));
+      gathered_blocks_.push_back(place_block(node, std::move(in)));
       ++counts_.gathered_nodes;
     }
   }
