@@ -95,6 +95,32 @@ KickFactors opening_half(const StepContext& ctx, int bin) {
   const double begin = static_cast<double>(ctx.ti_current);
   return comoving_kick(ctx, begin, begin + 0.5 * static_cast<double>(TimeLine::step_ticks(bin)));
 }
+// The particles of a leaf that close (open) their steps together mostly began them together
+// (take the same bin): each factor is worked out once for a run of them, the same value.
+struct ClosingHalves {
+  const StepContext& ctx;
+  IntegerTime begin = -1;
+  KickFactors k{};
+  const KickFactors& at(IntegerTime ti_begin) {
+    if (ti_begin != begin) {
+      k = closing_half(ctx, ti_begin);
+      begin = ti_begin;
+    }
+    return k;
+  }
+};
+struct OpeningHalves {
+  const StepContext& ctx;
+  int bin = -1;
+  KickFactors k{};
+  const KickFactors& at(int b) {
+    if (b != bin) {
+      k = opening_half(ctx, b);
+      bin = b;
+    }
+    return k;
+  }
+};
 
 // With a mesh step, a particle's own kicks take the tree's part of its gravity; the mesh's
 // part kicks over the mesh step's halves instead (docs/physics.md §11, "The mesh step").
@@ -198,6 +224,7 @@ void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
 void kick_close(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
+  ClosingHalves closing{ctx};
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
     // The force loop gave the hydro force per unit gas mass; hidden stars add inertia
@@ -207,7 +234,7 @@ void kick_close(StepContext& ctx, int c) {
     const double dt = 0.5 * ctx.timeline.kick_factor(gas.ti_begin[i], ctx.ti_current);
     if (dt != 0.0) {
       // Comoving: each term with its own factor from the step's midpoint (energy: int dt / a^2).
-      const KickFactors k = ctx.comoving ? closing_half(ctx, gas.ti_begin[i]) : KickFactors{dt, dt, dt};
+      const KickFactors k = ctx.comoving ? closing.at(gas.ti_begin[i]) : KickFactors{dt, dt, dt};
       if (ctx.comoving) {
         gas.v_full[i] += gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
         mesh_close_kick(ctx, gas.v_full[i], gas.a_mesh[i]);
@@ -234,7 +261,7 @@ void kick_close(StepContext& ctx, int c) {
   CollisionlessParticles& dm = ctx.dm;
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
     if (ctx.is_active_dm(i)) {
-      const double kick = ctx.comoving ? closing_half(ctx, dm.ti_begin[i]).gravity
+      const double kick = ctx.comoving ? closing.at(dm.ti_begin[i]).gravity
                                        : 0.5 * ctx.timeline.kick_factor(dm.ti_begin[i], ctx.ti_current);
       dm.v_full[i] += particle_gravity(ctx, dm.a_grav[i], dm.a_mesh[i]) * kick;
       mesh_close_kick(ctx, dm.v_full[i], dm.a_mesh[i]);
@@ -314,11 +341,12 @@ void timestep(StepContext& ctx, int c) {
 void kick_open(StepContext& ctx, int c) {
   GasParticles& gas = ctx.gas;
   Cell& cell = ctx.space.cell(c);
+  OpeningHalves opening{ctx};
   double v_max = 0.0;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (ctx.is_active(i)) {
       if (ctx.comoving) {
-        const KickFactors k = opening_half(ctx, gas.time_bin[i]);
+        const KickFactors k = opening.at(gas.time_bin[i]);
         gas.v_full[i] += gas.a_hydro[i] * k.hydro + particle_gravity(ctx, gas.a_grav[i], gas.a_mesh[i]) * k.gravity;
         mesh_open_kick(ctx, gas.v_full[i], gas.a_mesh[i]);
         gas.u_full[i] = kicked_energy(ctx, gas.u_full[i], gas.du_dt[i], k.energy);
@@ -337,7 +365,7 @@ void kick_open(StepContext& ctx, int c) {
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i)
     if (ctx.is_active_dm(i)) {
       dm.v_full[i] += particle_gravity(ctx, dm.a_grav[i], dm.a_mesh[i]) *
-                      (ctx.comoving ? opening_half(ctx, dm.time_bin[i]).gravity : 0.5 * ctx.timeline.step(dm.time_bin[i]));
+                      (ctx.comoving ? opening.at(dm.time_bin[i]).gravity : 0.5 * ctx.timeline.step(dm.time_bin[i]));
       mesh_open_kick(ctx, dm.v_full[i], dm.a_mesh[i]);
     }
 }
