@@ -97,30 +97,21 @@ KickFactors opening_half(const StepContext& ctx, int bin) {
 }
 // The particles of a leaf that close (open) their steps together mostly began them together
 // (take the same bin): each factor is worked out once for a run of them, the same value.
-struct ClosingHalves {
+template <class Key, KickFactors (*kHalf)(const StepContext&, Key)>
+struct HalfKicks {
   const StepContext& ctx;
-  IntegerTime begin = -1;
+  Key key = -1;
   KickFactors k{};
-  const KickFactors& at(IntegerTime ti_begin) {
-    if (ti_begin != begin) {
-      k = closing_half(ctx, ti_begin);
-      begin = ti_begin;
+  const KickFactors& at(Key next) {
+    if (next != key) {
+      k = kHalf(ctx, next);
+      key = next;
     }
     return k;
   }
 };
-struct OpeningHalves {
-  const StepContext& ctx;
-  int bin = -1;
-  KickFactors k{};
-  const KickFactors& at(int b) {
-    if (b != bin) {
-      k = opening_half(ctx, b);
-      bin = b;
-    }
-    return k;
-  }
-};
+using ClosingHalves = HalfKicks<IntegerTime, closing_half>;
+using OpeningHalves = HalfKicks<int, opening_half>;
 
 // With a mesh step, a particle's own kicks take the tree's part of its gravity; the mesh's
 // part kicks over the mesh step's halves instead (docs/physics.md §11, "The mesh step").
