@@ -31,7 +31,7 @@ class Reader {
   T get() {
     static_assert(std::is_trivially_copyable_v<T>);
     if (at_ + sizeof(T) > in_.size())
-      throw std::logic_error("assemble_tree_across_ranks: a message ended early; the ranks disagree on the tree");
+      throw std::logic_error("TreeAcrossRanks: a message ended early; the ranks disagree on the tree");
     T value;
     std::memcpy(&value, in_.data() + at_, sizeof(T));
     at_ += sizeof(T);
@@ -460,7 +460,7 @@ class TreeAssembler {
       std::sort(arrivals.begin(), arrivals.end(),
                 [](const Arrival& a, const Arrival& b) { return a.source.place < b.source.place; });
       if (static_cast<std::int64_t>(arrivals.size()) != node.total)
-        throw std::logic_error("assemble_tree_across_ranks: the ranks disagree on a node's sources");
+        throw std::logic_error("TreeAcrossRanks: the ranks disagree on a node's sources");
       if (!build) {
         const Block& block = gathered_blocks_[static_cast<std::size_t>(node.part)];
         for (std::int32_t k = 0; k < block.sources; ++k) {
@@ -621,7 +621,7 @@ class TreeAssembler {
       Reader in(all[static_cast<std::size_t>(q)]);
       for (std::size_t k = 0; k < all[static_cast<std::size_t>(q)].size() / sizeof(Envelope); ++k)
         for (const auto& g : envelope_groups(in.get<Envelope>())) groups.push_back(g);
-      // In the order the receiver splices them: the top's preorder.
+      // In the order the receiver reads them: the top's preorder.
       auto& out = to[static_cast<std::size_t>(q)];
       for (const std::int32_t t : preorder()) {
         const TopNode& node = top_[static_cast<std::size_t>(t)];
