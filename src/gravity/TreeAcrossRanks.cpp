@@ -3,45 +3,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <type_traits>
 
+#include "core/ByteMessages.hpp"
 #include "gravity/GravityWalkGroup.hpp"
 
 namespace fountain::gravity {
 
 namespace {
-
-template <class T>
-void put(std::vector<char>& out, const T& value) {
-  static_assert(std::is_trivially_copyable_v<T>);
-  const std::size_t at = out.size();
-  out.resize(at + sizeof(T));
-  std::memcpy(out.data() + at, &value, sizeof(T));
-}
-
-// Reads back what put() wrote; a short message is a logic error (the ranks disagree).
-class Reader {
- public:
-  explicit Reader(std::span<const char> in) : in_(in) {}
-  template <class T>
-  T get() {
-    static_assert(std::is_trivially_copyable_v<T>);
-    if (at_ + sizeof(T) > in_.size())
-      throw std::logic_error("TreeAcrossRanks: a message ended early; the ranks disagree on the tree");
-    T value;
-    std::memcpy(&value, in_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return value;
-  }
-
- private:
-  std::span<const char> in_;
-  std::size_t at_ = 0;
-};
 
 struct SourceRecord {
   Vec3 x;
@@ -91,6 +62,7 @@ class TreeAssembler {
     if (!has_sources_) return;
     tree_.length_unit_ = std::ldexp(1.0, std::ilogb(cube_.side));
     build_top();
+    order_ = preorder();
     scratch_ = {};
     // Room for the kept part at once (GravityTree's estimate of its nodes), rather than by
     // doubling, which set the peak of a rank's memory here.
@@ -127,8 +99,8 @@ class TreeAssembler {
     for (const Block& block : own_blocks_) {
       for (std::int32_t k = 0; k < block.sources; ++k) {
         const std::int32_t at = block.first + k;
-        tree_.store_source(at, tree_.index_[static_cast<std::size_t>(at)],
-                           source(block.source_of[static_cast<std::size_t>(k)]));
+        const SourceRecord r = record(block.source_of[static_cast<std::size_t>(k)]);
+        tree_.store_source(at, tree_.index_[static_cast<std::size_t>(at)], {r.x, r.mass, r.softening});
       }
       loose = block_moments(block) || loose;
     }
@@ -202,12 +174,13 @@ class TreeAssembler {
       }
     own_count_ = mine_.positions.size();
     std::vector<char> message;
-    put(message, lo);
-    put(message, hi);
-    put(message, static_cast<std::int64_t>(mine_.positions.size()));
+    MessageWriter w(message);
+    w.put(lo);
+    w.put(hi);
+    w.put(static_cast<std::int64_t>(mine_.positions.size()));
     std::int64_t total = 0;
     for (const auto& m : ranks_->allgather(message)) {
-      Reader in(m);
+      MessageReader in(m);
       const Vec3 l = in.get<Vec3>(), h = in.get<Vec3>();
       const auto count = in.get<std::int64_t>();
       if (count == 0) continue;
@@ -236,15 +209,16 @@ class TreeAssembler {
     while (!level.empty()) {
       // Per node: this rank's count, whether it has any, and its rank + 1 if so.
       std::vector<char> message;
+    MessageWriter w(message);
       for (const std::int32_t t : level) {
         const std::int64_t c = top_[static_cast<std::size_t>(t)].count;
-        put(message, c);
-        put(message, static_cast<std::int64_t>(c > 0 ? 1 : 0));
-        put(message, static_cast<std::int64_t>(c > 0 ? ranks_->rank() + 1 : 0));
+        w.put(c);
+        w.put(static_cast<std::int64_t>(c > 0 ? 1 : 0));
+        w.put(static_cast<std::int64_t>(c > 0 ? ranks_->rank() + 1 : 0));
       }
       std::vector<std::int64_t> sums(3 * level.size(), 0);
       for (const auto& m : ranks_->allgather(message)) {
-        Reader in(m);
+        MessageReader in(m);
         for (auto& s : sums) s += in.get<std::int64_t>();
       }
       std::vector<std::int32_t> next;
@@ -270,7 +244,7 @@ class TreeAssembler {
         if (c >= 0 && top_[static_cast<std::size_t>(c)].kind == Kind::empty) c = -1;
   }
 
-  // The top's nodes in preorder (children in octant order), as the tree lays them out.
+  // The top's nodes in preorder (children in octant order), as the walks visit them.
   std::vector<std::int32_t> preorder() const {
     std::vector<std::int32_t> out, stack{0};
     while (!stack.empty()) {
@@ -376,11 +350,6 @@ class TreeAssembler {
     return loose;
   }
 
-  GravityTree::RefitSource source(std::int32_t i) const {
-    const auto u = static_cast<std::size_t>(i);
-    return {mine_.positions[u], mine_.masses[u], mine_.softenings[u]};
-  }
-
   std::int32_t name(std::int32_t i) const { return mine_.names.empty() ? i : mine_.names[static_cast<std::size_t>(i)]; }
 
   // This rank's k-th source in the top's order: items_ while the top is built, then (for the
@@ -427,14 +396,15 @@ class TreeAssembler {
   // order). The message starts with whether this rank's subtrees grew loose.
   void gather_small_nodes(bool build) {
     std::vector<char> message;
-    put(message, static_cast<std::int64_t>(loose_ ? 1 : 0));
+    MessageWriter w(message);
+    w.put(static_cast<std::int64_t>(loose_ ? 1 : 0));
     for (const TopNode& node : top_) {
       if (node.kind != Kind::gathered) continue;
-      put(message, static_cast<std::int64_t>(node.count));
-      for (std::int32_t k = node.first; k < node.first + node.count; ++k) put(message, record(member(k)));
+      w.put(static_cast<std::int64_t>(node.count));
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) w.put(record(member(k)));
     }
     const auto all = ranks_->allgather(message);
-    std::vector<Reader> in;
+    std::vector<MessageReader> in;
     for (const auto& m : all) {
       in.emplace_back(m);
       loose_ = (in.back().get<std::int64_t>() != 0) || loose_;
@@ -556,10 +526,11 @@ class TreeAssembler {
     std::vector<std::int32_t> all(groups.size());
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
     export_node(block.root, groups, all, rules, nodes, sources);
-    put(message, static_cast<std::int64_t>(nodes.size()));
-    put(message, static_cast<std::int64_t>(sources.size()));
-    for (const Exported& e : nodes) put(message, e);
-    for (const SourceRecord& s : sources) put(message, s);
+    MessageWriter w(message);
+    w.put(static_cast<std::int64_t>(nodes.size()));
+    w.put(static_cast<std::int64_t>(sources.size()));
+    w.put(nodes.data(), nodes.size());
+    w.put(sources.data(), sources.size());
     counts_.nodes_sent += static_cast<std::int64_t>(nodes.size());
     counts_.sources_sent += static_cast<std::int64_t>(sources.size());
   }
@@ -607,7 +578,8 @@ class TreeAssembler {
   // visit.
   void exchange_essential_parts() {
     std::vector<char> message;
-    for (const Envelope& e : envelopes()) put(message, e);
+    MessageWriter w(message);
+    for (const Envelope& e : envelopes()) w.put(e);
     const auto all = ranks_->allgather(message);
     // The rules of the whole tree's walk (its slack follows the root cube).
     TreeNode root;
@@ -618,12 +590,12 @@ class TreeAssembler {
     for (int q = 0; q < ranks_->size(); ++q) {
       if (q == ranks_->rank()) continue;
       std::vector<GravityTree::Group> groups;
-      Reader in(all[static_cast<std::size_t>(q)]);
+      MessageReader in(all[static_cast<std::size_t>(q)]);
       for (std::size_t k = 0; k < all[static_cast<std::size_t>(q)].size() / sizeof(Envelope); ++k)
         for (const auto& g : envelope_groups(in.get<Envelope>())) groups.push_back(g);
       // In the order the receiver reads them: the top's preorder.
       auto& out = to[static_cast<std::size_t>(q)];
-      for (const std::int32_t t : preorder()) {
+      for (const std::int32_t t : order_) {
         const TopNode& node = top_[static_cast<std::size_t>(t)];
         if (node.kind == Kind::held && node.owner == ranks_->rank())
           export_block(own_blocks_[static_cast<std::size_t>(node.part)], groups, rules, out);
@@ -642,9 +614,9 @@ class TreeAssembler {
     tree_.nodes_.resize(prefix_nodes_);
     tree_.index_.resize(prefix_sources_);
     grow_sources(prefix_sources_);
-    std::vector<Reader> in;
+    std::vector<MessageReader> in;
     for (const auto& m : received_) in.emplace_back(m);
-    const std::vector<std::int32_t> order = preorder();
+    const std::vector<std::int32_t>& order = order_;
     // Where each top node's subtree starts, and (received parts) its extent in the array.
     std::vector<std::int32_t> entry(top_.size(), -1), part_end(top_.size(), -1);
     std::vector<std::int32_t> top_internal;
@@ -670,7 +642,7 @@ class TreeAssembler {
       } else if (top.owner == ranks_->rank()) {
         entry[static_cast<std::size_t>(t)] = own_blocks_[static_cast<std::size_t>(top.part)].root;
       } else {
-        Reader& from = in[static_cast<std::size_t>(top.owner)];
+        MessageReader& from = in[static_cast<std::size_t>(top.owner)];
         const auto node_count = from.get<std::int64_t>();
         const auto source_count = from.get<std::int64_t>();
         const auto first = static_cast<std::int32_t>(tree_.pos_.size());
@@ -748,6 +720,7 @@ class TreeAssembler {
   std::vector<GravityTree::SortItem> items_, scratch_;
   std::vector<std::int32_t> gathered_members_;
   std::vector<TopNode> top_;
+  std::vector<std::int32_t> order_;  // top_ in preorder
   GravityTree tree_;  // kept: the own and gathered blocks first, the rest made by each assembly
   std::vector<Block> own_blocks_, gathered_blocks_;
   std::size_t prefix_nodes_ = 0, prefix_sources_ = 0;
