@@ -368,13 +368,7 @@ void Engine::rebuild() {
     }
   }
   ctx_->cover_exceeded = false;
-  if (config_.gravity.enabled && ctx_->tree_messages) {
-    // Across ranks the tree's build is a collective: on this thread, after the lists' (and in
-    // halo mode after the holders' copies, which put each leaf's particles in place).
-    find_neighbour_lists(for_each);
-    share_neighbour_lists();
-    build_graph();
-  } else if (config_.gravity.enabled) {
+  if (config_.gravity.enabled && !ctx_->tree_messages) {
     // The new particle order needs a new gravity tree (its build is serial): it is built
     // beside the neighbour lists and the graph, which read only the cells, rather than in
     // the step's tree task, where it would hold up every walk. The lists' exchange across
@@ -399,7 +393,9 @@ void Engine::rebuild() {
     hold_leaves();
     recut_bytes_ += ranks_->traffic().bytes - bytes_before;
   }
-  if (config_.gravity.enabled && ctx_->tree_messages) {
+  if (ctx_->tree_messages) {
+    // Across ranks the tree's build is a collective: on this thread, after the lists', and in
+    // halo mode after the holders' copies, which put each leaf's particles in place.
     gravity::build_tree(*ctx_);
     ctx_->tree_current = true;
   }
