@@ -676,6 +676,7 @@ EOT
     expect_status_message "go together" "$bin" ic zoom --levels 3 4 5 --parent parent_run/snapshot_0001.hdf5 -o bad.hdf5
     expect_status_message "does not apply to zoom" "$bin" ic zoom -n 16 -o bad.hdf5
     expect_status_message "applies to zoom only" "$bin" ic cosmo --levels 3 4 5 -o bad.hdf5
+    expect_status_message "fix-amplitudes does not apply to zoom" "$bin" ic zoom --levels 3 4 5 --fix-amplitudes -o bad.hdf5
     expect_status_message "has 2 groups\|has [0-9]* groups" "$bin" ic zoom --levels 3 4 5 --box 20 --omega-b 0.03 \
       --hubble 0.6 --parent parent_run/snapshot_0001.hdf5 --groups fof.hdf5 --halo 999 -o bad.hdf5 ;;
   ic_cosmo_run)

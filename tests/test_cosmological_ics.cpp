@@ -126,6 +126,59 @@ TEST(CosmologicalIcs, SecondOrderDisplacementsOfTwoWavesAreExact) {
   }
 }
 
+// A paired partner is the same field with its sign reversed, exactly, so the Zel'dovich
+// displacements are the negatives of the seed's, bit for bit; a fixed field keeps each mode's
+// phase and takes the spectrum's own amplitude.
+TEST(CosmologicalIcs, PairedAndFixedFieldsKeepTheSeedsPhases) {
+  ics::CosmologicalBoxParams p;
+  p.level = 4;
+  p.box = 64.0;
+  p.cosmology = {0.3, 0.7, 0.03, 0.6};
+  p.gas = false;
+  p.lpt_order = 1;
+  const ics::SpectralField seed = ics::linear_density(p);
+  ics::CosmologicalBoxParams inverted = p;
+  inverted.invert_phases = true;
+  const ics::SpectralField partner = ics::linear_density(inverted);
+  ics::CosmologicalBoxParams fixed = p;
+  fixed.fix_amplitudes = true;
+  const ics::SpectralField fixed_field = ics::linear_density(fixed);
+  const cosmology::LinearPowerSpectrum power(cosmology::EisensteinHu(p.cosmology, p.transfer), p.n_s, p.sigma_8);
+  const int n = p.cells();
+  const double cell_volume = std::pow(p.box / n, 3);
+  int modes = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j)
+      for (int k = 0; k <= n / 2; ++k) {
+        const std::size_t c = seed.index(i, j, k);
+        EXPECT_EQ(partner.values[c], -seed.values[c]) << i << " " << j << " " << k;
+        const double kk = std::sqrt(std::pow(seed.wave(i), 2) + std::pow(seed.wave(j), 2) + std::pow(seed.wave(k), 2));
+        if (kk == 0.0 || seed.nyquist(i, j, k)) continue;
+        ++modes;
+        // |delta_k|^2 = P(k) / Delta^3 times the unit noise's mean |w_k|^2 = N^3.
+        EXPECT_NEAR(std::norm(fixed_field.values[c]) / (power(kk) / cell_volume * n * n * n), 1.0, 1e-12);
+        EXPECT_NEAR(std::arg(fixed_field.values[c]), std::arg(seed.values[c]), 1e-12);
+      }
+  EXPECT_GT(modes, 1000);
+  const ics::CosmologicalBox a = ics::make_cosmological_box(p, Units{});
+  const ics::CosmologicalBox b = ics::make_cosmological_box(inverted, Units{});
+  const double spacing = p.box / n;
+  double largest = 0.0;
+  for (std::size_t c = 0; c < a.dark_matter.size(); ++c) {
+    const std::size_t ii = c / (n * n), jj = (c / n) % n, kk = c % n;
+    const Vec3 q = Vec3{ii + 0.5, jj + 0.5, kk + 0.5} * spacing;
+    for (int axis = 0; axis < 3; ++axis) {
+      double da = a.dark_matter.x[c][axis] - q[axis], db = b.dark_matter.x[c][axis] - q[axis];
+      da -= p.box * std::round(da / p.box);  // positions are folded into the box
+      db -= p.box * std::round(db / p.box);
+      EXPECT_NEAR(da, -db, 1e-12 * p.box) << "particle " << c;
+      EXPECT_EQ(a.dark_matter.v[c][axis], -b.dark_matter.v[c][axis]) << "particle " << c;
+      largest = std::max(largest, std::fabs(da));
+    }
+  }
+  EXPECT_GT(largest, 1e-3 * spacing);  // the field moved the particles at all
+}
+
 // The particles' own power spectrum (64^3 in 256 Mpc/h; CIC on a mesh twice as fine, divided by the assignment
 // window) against the input field's realised power scaled to the starting time, per shell of
 // width k_f up to half the particles' Nyquist wave number: within 5%.

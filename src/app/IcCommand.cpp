@@ -98,6 +98,10 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
                                    "or parent - 1, parent <= finest <= 10",
                                    z.coarsest, z.parent, z.finest));
     if (r.resolution_given) throw InputError("option -n,--resolution does not apply to zoom: --levels sets its grids");
+    // Fixed amplitudes on the finest grid would break the nesting: a fine block's mean would no
+    // longer be its coarse cell's noise.
+    if (r.cosmo.fix_amplitudes)
+      throw InputError("option --fix-amplitudes does not apply to zoom: its levels' noise must nest");
   }
   if (r.problem == "cosmo" || r.problem == "zoom") {
     const ics::CosmologicalBoxParams& c = r.cosmo;

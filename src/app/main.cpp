@@ -99,7 +99,11 @@ int main(int argc, char** argv) {
       ic->add_option("--lpt", cosmo.lpt_order, "cosmo: Lagrangian perturbation order, 1 (Zel'dovich) or 2")
           ->check(CLI::IsMember({1, 2}))
           ->capture_default_str(),
-      ic->add_flag("--no-gas", no_gas, "cosmo: dark matter only")};
+      ic->add_flag("--no-gas", no_gas, "cosmo: dark matter only"),
+      ic->add_flag("--invert-phases", cosmo.invert_phases,
+                   "cosmo: the seed's field with its sign reversed (the partner of a paired run)"),
+      ic->add_flag("--fix-amplitudes", cosmo.fix_amplitudes,
+                   "cosmo: every mode's amplitude set to sqrt(P(k)), only its phase random (not for zoom)")};
 
   auto* fof = app.add_subcommand("fof", "Friends-of-friends groups of a snapshot, written as an HDF5 catalogue");
   FofRequest fof_request;

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <complex>
 #include <numbers>
 #include <utility>
 
@@ -27,12 +28,17 @@ SpectralField linear_density_of(const std::vector<double>& noise, const Cosmolog
   SpectralField delta = forward_transform(noise, n, p.box);
   const cosmology::LinearPowerSpectrum power(cosmology::EisensteinHu(p.cosmology, p.transfer), p.n_s, p.sigma_8);
   const double cell_volume = std::pow(p.box / n, 3);
+  // Unit white noise's transform has <|w_k|^2> = N^3, the modulus a fixed mode takes.
+  const double fixed_modulus = std::sqrt(static_cast<double>(n) * n * n);
+  const double sign = p.invert_phases ? -1.0 : 1.0;
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j)
       for (int k = 0; k <= n / 2; ++k) {
         const double kx = delta.wave(i), ky = delta.wave(j), kz = delta.wave(k);
         const double kk = std::sqrt(kx * kx + ky * ky + kz * kz);
-        delta.values[delta.index(i, j, k)] *= kk > 0.0 ? std::sqrt(power(kk) / cell_volume) : 0.0;
+        std::complex<double>& mode = delta.values[delta.index(i, j, k)];
+        if (p.fix_amplitudes && std::abs(mode) > 0.0) mode *= fixed_modulus / std::abs(mode);
+        mode *= kk > 0.0 ? sign * std::sqrt(power(kk) / cell_volume) : 0.0;
       }
   return delta;
 }

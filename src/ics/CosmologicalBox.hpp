@@ -26,6 +26,11 @@ struct CosmologicalBoxParams {
   cosmology::TransferKind transfer = cosmology::TransferKind::full;
   int lpt_order = 2;             // 1: Zel'dovich, 2: second order
   bool gas = true;               // gas at the cells' far corners, Omega_b / Omega_m of the mass
+  // Variance suppression (Angulo & Pontzen 2016), as monofonIC's DoInversion and DoFixing: the
+  // same noise with every mode's sign reversed (a pair's mean cancels the realisation's
+  // second-order term), and every mode's amplitude set to its mean (only its phase random).
+  bool invert_phases = false;
+  bool fix_amplitudes = false;
   int cells() const { return 1 << level; }
 };
 
@@ -46,7 +51,8 @@ using IcProgress = std::function<void(const std::string& stage)>;
 CosmologicalBox make_cosmological_box(const CosmologicalBoxParams& p, const Units& units, const IcProgress& progress = {});
 
 // The linear density contrast at z = 0 (D = 1) the box is made from, as Fourier coefficients:
-// each cell's white noise, transformed, times sqrt(P(k) / (L/N)^3).
+// each cell's white noise, transformed, times sqrt(P(k) / (L/N)^3) (and fixed or inverted as
+// p asks).
 SpectralField linear_density(const CosmologicalBoxParams& p);
 // The same from a given white-noise grid of p.level (a zoom's nested noise).
 SpectralField linear_density_of(const std::vector<double>& noise, const CosmologicalBoxParams& p);
