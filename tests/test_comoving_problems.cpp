@@ -81,10 +81,11 @@ TEST(ComovingProblems, ConstantCosmologicalVolume) {
 // caustic each sheet of Lagrangian q is exactly at x = q - (a/a_c) sin(kq)/k with
 // v'_x = -H0 a^(3/2) sin(kq)/(a_c k), density rhobar'/(1 - (a/a_c) cos kq), and adiabatic:
 // u' = ubar'_i (rho'/rhobar')^(2/3). At z = 4 (no pair converges physically yet, so the
-// viscosity is idle) every quantity must follow it; at z = 1.5 the positions must, while the
-// velocities and densities are reported (docs/validation.md: the viscosity then acts on the
-// converging flow, and the kernel smooths the narrow peak). MSPH on gives the same to the bit
-// (no pair is decoupled before shell crossing).
+// viscosity is idle) every quantity must follow it; at z = 1.5 the positions and densities
+// must, while the velocities are reported (docs/validation.md: the viscosity then brakes the
+// converging flow). 64 neighbours: by z = 1.5 the planes are 1.8 times their first spacing
+// apart in the voids, and 32 neighbours' kernel spans too few of them for a density to 5%.
+// MSPH on gives the same to the bit (no pair is decoupled before shell crossing).
 struct PancakeErrors {
   double x_rms, v_rms, v_transverse, rho_median, u_median;
   long long decoupled;
@@ -137,6 +138,7 @@ TEST(ComovingProblems, ZeldovichPancake) {
     }
     RunConfig cfg = comoving_config(box, 1.0, 0.0, a_begin, 0.4, 4 * n);
     cfg.gravity.softening_gas = 0.05;
+    cfg.hydro.neighbours = 64;
     cfg.hydro.msph = msph;
     Engine engine(cfg, g);
     engine.initialise();
@@ -163,6 +165,7 @@ TEST(ComovingProblems, ZeldovichPancake) {
   for (const PancakeErrors& e : z15) {
     EXPECT_LE(e.x_rms, 0.02);
     EXPECT_LE(e.v_transverse, 0.01);
+    EXPECT_LE(e.rho_median, 0.05);
   }
   // MSPH is SPH here: nothing is decoupled, so the runs agree to the bit.
   EXPECT_EQ(z15[1].decoupled, 0);
