@@ -25,6 +25,31 @@ constexpr std::size_t kNotHeld = std::numeric_limits<std::size_t>::max() / 4;
 // Bytes a particle takes in a recut's message: its fields, and at most this much beside them.
 constexpr std::size_t kParticleHeaderBytes = 16;
 
+// Each of `places` with its index, sorted by place. What a rank has at a recut comes as a few
+// runs already in order (its held leaves' particles, then each sender's arrivals in the
+// sender's order), so neighbouring runs are merged rather than the whole sorted anew.
+std::vector<std::pair<std::uint64_t, std::size_t>> sorted_by_place(const std::vector<std::uint64_t>& places) {
+  std::vector<std::pair<std::uint64_t, std::size_t>> out(places.size());
+  std::vector<std::size_t> runs{0};
+  for (std::size_t i = 0; i < places.size(); ++i) {
+    out[i] = {places[i], i};
+    if (i > 0 && places[i] < places[i - 1]) runs.push_back(i);
+  }
+  runs.push_back(places.size());
+  while (runs.size() > 2) {
+    const std::size_t m = runs.size() - 1;  // runs now, each [runs[k], runs[k + 1])
+    std::vector<std::size_t> merged{0};
+    for (std::size_t k = 0; k + 1 < m; k += 2) {
+      std::inplace_merge(out.begin() + static_cast<std::ptrdiff_t>(runs[k]), out.begin() + static_cast<std::ptrdiff_t>(runs[k + 1]),
+                         out.begin() + static_cast<std::ptrdiff_t>(runs[k + 2]));
+      merged.push_back(runs[k + 2]);
+    }
+    if (m % 2 == 1) merged.push_back(runs[m]);
+    runs = std::move(merged);
+  }
+  return out;
+}
+
 }  // namespace
 
 void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& measured, const ForEach& for_each) {
@@ -141,9 +166,21 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
         }
       });
   // This rank's top cells' particles ordered by top cell and, within one, by place: the order
-  // they had, in which one rank's recut takes them.
-  std::sort(entries.begin(), entries.end(),
-            [](const Entry& a, const Entry& b) { return a.top != b.top ? a.top < b.top : a.place < b.place; });
+  // they had, in which one rank's recut takes them. Counted out by top cell, then sorted by
+  // place within each: a top cell's entries are a few runs already in order (this rank's,
+  // then each sender's), and short.
+  std::vector<std::size_t> bucket(ntop + 1, 0);
+  for (const Entry& e : entries) ++bucket[static_cast<std::size_t>(e.top) + 1];
+  std::partial_sum(bucket.begin(), bucket.end(), bucket.begin());
+  std::vector<Entry> by_top(entries.size());
+  {
+    std::vector<std::size_t> next(bucket.begin(), bucket.end() - 1);
+    for (const Entry& e : entries) by_top[next[static_cast<std::size_t>(e.top)]++] = e;
+  }
+  for (std::size_t t = 0; t < ntop; ++t)
+    std::sort(by_top.begin() + static_cast<std::ptrdiff_t>(bucket[t]), by_top.begin() + static_cast<std::ptrdiff_t>(bucket[t + 1]),
+              [](const Entry& a, const Entry& b) { return a.place < b.place; });
+  entries = std::move(by_top);
   std::vector<std::size_t>& order = r.owned;
   order.resize(entries.size());
   std::vector<std::size_t> scratch(entries.size());
@@ -261,9 +298,7 @@ void Engine::hold_leaves() {
   // by place (at a restart's first recut its place is its index).
   std::vector<std::pair<std::uint64_t, std::size_t>> by_place;
   if (!r.everyone) {
-    by_place.resize(r.place.size());
-    for (std::size_t i = 0; i < r.place.size(); ++i) by_place[i] = {r.place[i], i};
-    std::sort(by_place.begin(), by_place.end());
+    by_place = sorted_by_place(r.place);
   }
   // Each owner tells the holders of its leaves which particles they hold, by place, and then
   // sends whole only those a holder had no current copy of.
