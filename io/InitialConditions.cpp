@@ -636,6 +636,13 @@ void write_ic_file(const std::string& path, const GasFields& gas, const Collisio
       file.write_attribute("/Units", "UnitLength_in_cm", u.length_cgs);
       file.write_attribute("/Units", "UnitMass_in_g", u.mass_cgs);
       file.write_attribute("/Units", "UnitVelocity_in_cm_per_s", u.velocity_cgs);
+      if (!cosmological->generator_numbers.empty() || !cosmological->generator_integers.empty() ||
+          !cosmological->generator_words.empty()) {
+        file.create_group("/Cosmology");
+        for (const auto& [name, value] : cosmological->generator_numbers) file.write_attribute("/Cosmology", name, value);
+        for (const auto& [name, value] : cosmological->generator_integers) file.write_attribute("/Cosmology", name, value);
+        for (const auto& [name, value] : cosmological->generator_words) file.write_attribute("/Cosmology", name, value);
+      }
     } else {
       hdf5::write_gadget_header(file, {n, high.count, low.count, 0, 0, 0}, {box_size.x, box_size.y, box_size.z},
                                 time);

@@ -1,6 +1,9 @@
 // Reading and writing gas and dark matter initial conditions in the GADGET HDF5 layout.
 #pragma once
+#include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
@@ -82,6 +85,11 @@ struct CosmologicalIcInfo {
   cosmology::CosmologyParams cosmology;
   double a = 1.0;
   Units units;
+  // How a generator made the field (seed, spectrum, order, pairing), written as attributes of
+  // /Cosmology, so that a file says which realisation it holds.
+  std::vector<std::pair<std::string, double>> generator_numbers;
+  std::vector<std::pair<std::string, std::int64_t>> generator_integers;
+  std::vector<std::pair<std::string, std::string>> generator_words;
 };
 void write_initial_conditions(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
                               double box_size, const CosmologicalIcInfo& info);

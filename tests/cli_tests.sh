@@ -684,6 +684,30 @@ EOT
     # cosmology it was made for, and refuses another; bad options are named.
     "$bin" ic cosmo -n 8 --box 20 --omega-b 0.03 --hubble 0.6 --seed 5 -o box.hdf5 > ic.txt 2>&1 || { cat ic.txt; fail "ic cosmo"; }
     grep -q "^wrote box.hdf5 (8^3 dark matter and gas particles" ic.txt || { cat ic.txt; fail "ic cosmo's summary"; }
+    # The file says how it was made; its paired partner says so too, and its dark matter moves
+    # the other way (the Zel'dovich and 2LPT parts: x_A + x_B - 2q is second order alone).
+    "$bin" ic cosmo -n 8 --box 20 --omega-b 0.03 --hubble 0.6 --seed 5 --invert-phases -o partner.hdf5 > ic2.txt 2>&1 \
+      || { cat ic2.txt; fail "ic cosmo --invert-phases"; }
+    "$python" - <<'EOT' || fail "the /Cosmology records or the partner's field are wrong"
+import h5py, numpy as np, sys
+a, b = h5py.File('box.hdf5', 'r'), h5py.File('partner.hdf5', 'r')
+ca, cb = a['Cosmology'].attrs, b['Cosmology'].attrs
+ok = ca['Seed'] == b'5' and cb['Seed'] == b'5' and ca['InvertPhases'] == 0 and cb['InvertPhases'] == 1
+ok = ok and ca['Generator'] == b'fountain ic cosmo' and ca['Level'] == 3 and ca['LPTOrder'] == 2 and ca['Sigma8'] == 0.9
+cell = 20.0 / 8
+ia, ib = np.argsort(a['PartType1/ParticleIDs'][:]), np.argsort(b['PartType1/ParticleIDs'][:])
+ids = a['PartType1/ParticleIDs'][:][ia] - 1  # ID 1 + n for lattice cell n = (i N + j) N + k
+lattice = np.stack([ids // 64 + 0.5, (ids // 8) % 8 + 0.5, ids % 8 + 0.5], axis=1) * cell
+da = a['PartType1/Coordinates'][:][ia] - lattice
+db = b['PartType1/Coordinates'][:][ib] - lattice
+da -= 20.0 * np.round(da / 20.0)
+db -= 20.0 * np.round(db / 20.0)
+first = np.abs(da - db).max() / 2   # the first-order part, reversed
+second = np.abs(da + db).max() / 2  # the second-order part, kept
+ok = ok and first > 0.01 * cell and second < 0.1 * first
+print(f"partner: first-order displacement up to {first:.3g}, second-order {second:.3g} Mpc/h")
+sys.exit(0 if ok else 1)
+EOT
     cat > params.yml <<EOT
 initial_conditions:
   file: box.hdf5

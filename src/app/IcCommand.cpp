@@ -130,6 +130,27 @@ void check_ic_request(const IcRequest& r, double memory_bytes) {
                                  r.problem, resolution_of(r), count, bytes_text(need), bytes_text(memory_bytes)));
 }
 
+io::CosmologicalIcInfo cosmological_ic_info(const IcRequest& r, const ics::CosmologicalBoxParams& c, double a,
+                                            const Units& units) {
+  io::CosmologicalIcInfo info{c.cosmology, a, units, {}, {}, {}};
+  info.generator_words = {{"Generator", "fountain ic " + r.problem},
+                          {"Seed", std::to_string(c.seed)},
+                          {"Transfer", cosmology::kTransferKindNames[static_cast<int>(c.transfer)]}};
+  info.generator_numbers = {{"Sigma8", c.sigma_8}, {"n_s", c.n_s}, {"RedshiftStart", 1.0 / c.a_start - 1.0}};
+  info.generator_integers = {{"LPTOrder", c.lpt_order},
+                             {"InvertPhases", c.invert_phases ? 1 : 0},
+                             {"FixAmplitudes", c.fix_amplitudes ? 1 : 0}};
+  if (r.problem == "zoom") {
+    const ics::ZoomLevels& z = r.zoom.levels;
+    info.generator_integers.insert(info.generator_integers.end(),
+                                   {{"LevelCoarsest", z.coarsest}, {"LevelParent", z.parent}, {"LevelFinest", z.finest}});
+    info.generator_numbers.emplace_back("MassScale", r.zoom.mass_scale);
+  } else {
+    info.generator_integers.emplace_back("Level", c.level);
+  }
+  return info;
+}
+
 std::string write_ic(const IcRequest& r) {
   check_ic_request(r, available_memory_bytes());
   if (r.problem == "zoom") return write_zoom_ic(r);
@@ -147,7 +168,7 @@ std::string write_ic(const IcRequest& r) {
     };
     const ics::CosmologicalBox box = ics::make_cosmological_box(c, units, progress);
     progress("writing " + r.output);
-    io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, {c.cosmology, box.a, units});
+    io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, cosmological_ic_info(r, c, box.a, units));
     progress("done");
     double rms = 0.0;
     for (std::size_t i = 0; i < box.dark_matter.size(); ++i) {

@@ -6,6 +6,7 @@
 #include "ics/CosmologicalBox.hpp"
 #include "ics/RotatingSphere.hpp"
 #include "ics/ZoomInitialConditions.hpp"
+#include "io/InitialConditions.hpp"
 
 namespace fountain {
 
@@ -48,6 +49,11 @@ void check_ic_request(const IcRequest& r, double memory_bytes);
 // Checks the request against this machine's memory, builds the particles and writes them;
 // returns the line to print.
 std::string write_ic(const IcRequest& r);
+
+// What a cosmological or zoom file records of how it was made (its /Cosmology group): the
+// generator, seed, spectrum, perturbation order and pairing, and the zoom's levels.
+io::CosmologicalIcInfo cosmological_ic_info(const IcRequest& r, const ics::CosmologicalBoxParams& c, double a,
+                                            const Units& units);
 
 // `fountain ic zoom` (ZoomCommand.cpp): the parent run's initial conditions, or with a parent
 // run and its groups, a zoom on one of its halos (COSMOLOGY.md C8).

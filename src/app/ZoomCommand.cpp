@@ -83,7 +83,7 @@ std::string write_zoom_ic(const IcRequest& r) {
     // The parent run: dark matter only, one particle per parent-level cell.
     c.gas = false;
     const ics::CosmologicalBox box = ics::make_zoom(c, levels, {}, units);
-    io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, {c.cosmology, box.a, units});
+    io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, cosmological_ic_info(r, c, box.a, units));
     return fmt::format("wrote {} (the parent run of zoom levels {}, {}, {}: {}^3 dark matter particles of {:.4g} Msun/h, "
                        "box {} Mpc/h, z = {})",
                        r.output, levels.coarsest, levels.parent, levels.finest, np, box.dark_matter.mass[0], c.box,
@@ -118,7 +118,7 @@ std::string write_zoom_ic(const IcRequest& r) {
   }
   ics::CosmologicalBox box = ics::make_zoom(c, levels, region, units);
   if (z.mass_scale != 1.0) scale_box(box, z.mass_scale);
-  io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, {c.cosmology, box.a, units});
+  io::write_initial_conditions(r.output, box.gas, box.dark_matter, box.box, cosmological_ic_info(r, c, box.a, units));
   std::size_t high = 0;
   for (Species s : box.dark_matter.species) high += s == Species::DarkMatter;
   return fmt::format("wrote {} (zoom on group {} of {}: M_200 = {:.4g} Msun/h, R_200 = {:.4g} Mpc/h; the particles within "
