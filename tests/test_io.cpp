@@ -541,7 +541,7 @@ TEST_F(IoTest, LeanStoresWriteWhatTheRunsStoresWrite) {
   for (std::size_t i = 0; i < d.size(); ++i)
     dm.push_back(d.id[i], i % 3 == 0 ? fountain::Species::LowResDarkMatter : fountain::Species::DarkMatter,
                  d.mass[i], d.x[i], d.v[i]);
-  const fountain::io::CosmologicalIcInfo info{{}, 0.25, {}};
+  const fountain::io::CosmologicalIcInfo info{{}, 0.25, {}, {}, {}, {}};
   const std::string lean = file("lean.hdf5"), run = file("run.hdf5");
   fountain::io::write_initial_conditions(lean, gas, dm, 3.0, info);
   fountain::io::write_initial_conditions(run, fountain::to_run_particles(gas), fountain::to_run_particles(dm), 3.0, info);
