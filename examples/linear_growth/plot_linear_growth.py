@@ -101,9 +101,7 @@ def second_order_odd_part(folders):
     """Per shell, 2 sum Re(delta_1* delta_2) / sum |delta_1|^2 at D = 1, of the pair's field."""
     xa, box, a0, n = lattice_positions(os.path.join(folders[0], "snapshot_0000.hdf5"))
     xb = lattice_positions(os.path.join(folders[1], "snapshot_0000.hdf5"))[0]
-    with h5py.File(os.path.join(folders[0], "snapshot_0000.hdf5"), "r") as f:
-        om = float(f["/Header"].attrs["Omega0"])
-        ol = float(f["/Header"].attrs["OmegaLambda"])
+    om, ol = shell_power(os.path.join(folders[0], "snapshot_0000.hdf5"))[1:3]
     d = xa - xb
     d -= box * np.round(d / box)
     psi = (0.5 * d / (growth(a0, om, ol) / growth(1.0, om, ol))).reshape(n, n, n, 3)

@@ -2,10 +2,7 @@
 #pragma once
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
 #include <span>
-#include <stdexcept>
-#include <type_traits>
 #include <vector>
 
 #include "core/ByteMessages.hpp"

@@ -209,7 +209,7 @@ class TreeAssembler {
     while (!level.empty()) {
       // Per node: this rank's count, whether it has any, and its rank + 1 if so.
       std::vector<char> message;
-    MessageWriter w(message);
+      MessageWriter w(message);
       for (const std::int32_t t : level) {
         const std::int64_t c = top_[static_cast<std::size_t>(t)].count;
         w.put(c);
@@ -616,11 +616,10 @@ class TreeAssembler {
     grow_sources(prefix_sources_);
     std::vector<MessageReader> in;
     for (const auto& m : received_) in.emplace_back(m);
-    const std::vector<std::int32_t>& order = order_;
     // Where each top node's subtree starts, and (received parts) its extent in the array.
     std::vector<std::int32_t> entry(top_.size(), -1), part_end(top_.size(), -1);
     std::vector<std::int32_t> top_internal;
-    for (const std::int32_t t : order) {
+    for (const std::int32_t t : order_) {
       const TopNode& top = top_[static_cast<std::size_t>(t)];
       const auto here = static_cast<std::int32_t>(tree_.nodes_.size());
       if (top.kind == Kind::internal) {
@@ -669,18 +668,18 @@ class TreeAssembler {
     }
     // after[t]: the entry of the node the preorder reaches once t's subtree is done (-1: none).
     std::vector<std::size_t> subtree_end(top_.size());
-    for (auto k = order.size(); k-- > 0;) {
-      const TopNode& top = top_[static_cast<std::size_t>(order[k])];
+    for (auto k = order_.size(); k-- > 0;) {
+      const TopNode& top = top_[static_cast<std::size_t>(order_[k])];
       std::size_t end = k + 1;
       for (const std::int32_t c : top.child)
         if (c >= 0) end = std::max(end, subtree_end[static_cast<std::size_t>(c)]);
-      subtree_end[static_cast<std::size_t>(order[k])] = end;
+      subtree_end[static_cast<std::size_t>(order_[k])] = end;
     }
     auto after = [&](std::int32_t t) {
       const std::size_t end = subtree_end[static_cast<std::size_t>(t)];
-      return end < order.size() ? entry[static_cast<std::size_t>(order[end])] : -1;
+      return end < order_.size() ? entry[static_cast<std::size_t>(order_[end])] : -1;
     };
-    for (const std::int32_t t : order) {
+    for (const std::int32_t t : order_) {
       const TopNode& top = top_[static_cast<std::size_t>(t)];
       const std::int32_t next = after(t);
       const std::int32_t at = entry[static_cast<std::size_t>(t)];
