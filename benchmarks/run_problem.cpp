@@ -1,6 +1,7 @@
 // Whole-run benchmark of a standard hydro problem: wall time, step costs, parallel share,
 // peak memory and accuracy, written as JSON. Usage: fountain_run_bench sod|sedov|gresho
-// [--threads N] [--resolution N] [--courant-criterion syw|signal_velocity] [--json FILE] [--step-log FILE]
+// [--threads N] [--resolution N] [--courant-criterion syw|signal_velocity] [--viscosity-reconstruction]
+// [--json FILE] [--step-log FILE]
 // [--ic FILE]
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -38,6 +39,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--split", split, "space.cell_split_size");
   double viscosity_alpha = HydroParams{}.viscosity_alpha;
   app.add_option("--viscosity-alpha", viscosity_alpha, "hydro.viscosity_alpha (the paper's 1.3 by default)");
+  bool reconstruction = false;
+  app.add_flag("--viscosity-reconstruction", reconstruction, "hydro.viscosity_reconstruction");
   double neighbours_tolerance = HydroParams{}.neighbours_tolerance;
   app.add_option("--neighbours-tolerance", neighbours_tolerance, "hydro.neighbours_tolerance");
   double skin = SpaceConfig{}.skin;
@@ -94,6 +97,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.pin_threads = pin;
   c.hydro.neighbours = neighbours;
   c.hydro.viscosity_alpha = viscosity_alpha;
+  c.hydro.viscosity_reconstruction = reconstruction;
   c.hydro.neighbours_tolerance = neighbours_tolerance;
   c.hydro.msph = false;
   c.hydro.limiter_bins = 1;
@@ -164,12 +168,12 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   }
   const double per_particle_us = full_steps > 0 ? 1e6 * full_step_s / full_steps / static_cast<double>(n) : 0.0;
   const std::string json = fmt::format(
-      "{{\"problem\": \"{}\", \"courant_criterion\": \"{}\", \"particles\": {}, \"threads\": {}, \"neighbours\": {}, "
-      "\"t_end\": {}, "
+      "{{\"problem\": \"{}\", \"courant_criterion\": \"{}\", \"viscosity_reconstruction\": {}, \"particles\": {}, "
+      "\"threads\": {}, \"neighbours\": {}, \"t_end\": {}, "
       "\"wall_s\": {:.3f}, \"steps\": {}, \"full_steps\": {}, \"full_step_us_per_particle\": {:.4f}, "
       "\"updates_per_s\": {:.4g}, \"tasks_busy_share_of_thread_time\": {:.4f}, \"peak_rss_bytes_per_particle\": {:.1f}, "
       "{}, {}}}\n",
-      problem, criterion, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
+      problem, criterion, reconstruction, n, e.threads(), neighbours, t_end, wall, e.steps(), full_steps, per_particle_us, updates / wall,
       tasks_wall > 0 ? tasks_busy / (tasks_wall * e.threads()) : 0.0, peak_bytes / static_cast<double>(n), accuracy, ranks);
   bench::report_json(mpi, json, json_path);
   return 0;

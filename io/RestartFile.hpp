@@ -17,7 +17,7 @@ namespace fountain::io {
 //    (particles/ParticleFields.hpp), the fields it flags for restarts.
 // 9: the mesh step of comoving TreePM (MeshStepBin, MeshStepBegin) and the mesh's parts of
 //    the accelerations and potentials.
-inline constexpr int kRestartFormatVersion = 9;
+inline constexpr int kRestartFormatVersion = 10;
 
 struct RestartState {
   GasParticles gas;

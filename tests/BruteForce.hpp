@@ -42,6 +42,18 @@ struct BruteForce {
     return hydro::finish_density(s, h);
   }
 
+  // The strain rate the viscosity's reconstruction reads, at smoothing length h.
+  hydro::StrainRate strain(std::size_t i, double h) const {
+    hydro::GradientSums s;
+    for (std::size_t j = 0; j < gas.size(); ++j) {
+      const Vec3 dx = separation(i, j);
+      const double r2 = dot(dx, dx);
+      if (r2 >= h * h || decoupled(i, j, dx, r2)) continue;
+      hydro::iact_gradient(dx, gas.v[i] - gas.v[j], r2, 1.0 / h, gas.mass[j], s);
+    }
+    return hydro::strain_rate(s);
+  }
+
   // The h at which the weighted neighbour number is exactly N_ngb (bisection).
   double solve_h(std::size_t i, double h_guess) const {
     double lo = 0.0, hi = h_guess;
@@ -56,7 +68,7 @@ struct BruteForce {
   hydro::ForceSums force(std::size_t i) const {
     auto state = [&](std::size_t k) {
       return hydro::make_force_state(gas.v[k], gas.mass[k], gas.rho[k], gas.u[k], gas.h[k], gas.div_v[k],
-                                     gas.curl_v[k], p);
+                                     gas.curl_v[k], p, {gas.strain_diagonal[k], gas.strain_shear[k]});
     };
     const auto fi = state(i);
     hydro::ForceSums s;

@@ -137,7 +137,8 @@ with h5py.File('zero.hdf5', 'w') as f:
     # (which do not divide it) and 5 (one owns no cell), with the owners chosen anew at every
     # recut (a repartition in the middle of the run), and cooling on, its snapshots and statistics
     # gathered to rank 0 40 particles a message, and its recuts and exchanges in rounds of
-    # 20,000 bytes (about 60 particles, or a few cells). The leak checker is off: Open MPI's
+    # 20,000 bytes (about 60 particles, or a few cells); its viscosity is the reconstructed one, so
+    # the strain rates and entropies travel with the ghosts' results. The leak checker is off: Open MPI's
     # own allocations outlive MPI_Finalize.
     mpirun_n() { ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np "$@"; }
     extra="" ranks="2 3 4"
@@ -155,17 +156,22 @@ domain:
   message_bytes: 20000
 cooling:
   enabled: true
+hydro:
+  viscosity_reconstruction: true
 output:
   statistics_every: 4
   gather_particles: 40" ;;
       mpi_gravity_ranks)
         # 7,208 particles on 4 x 4 x 4 top cells: every rank owns some, and each assembles its
-        # gravity tree with parts of the others' (halo mode: gas only, open boundaries).
+        # gravity tree with parts of the others' (halo mode: gas only, open boundaries). The
+        # reconstructed viscosity: its strain rates also come back from the restart set.
         "$bin" ic evrard -n 12 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the Evrard ICs"
         T_END=0.05 extra="gravity:
   enabled: true
   softening_gas: 0.01
   G: 1
+hydro:
+  viscosity_reconstruction: true
 space:
   top_cells: 4" ;;
       mpi_feedback_ranks)

@@ -213,7 +213,7 @@ TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep)
   // graph read them with no drift between.
   std::size_t ghost_derived = 0;
   ghost_fields(g, [&](auto& f) { ghost_derived += std::find(derived.begin(), derived.end(), &f) != derived.end(); });
-  EXPECT_EQ(ghost_derived, 5u);
+  EXPECT_EQ(ghost_derived, 6u);
 }
 
 // A leaf's sender and receiver copies, differing everywhere, with every other particle of

@@ -21,11 +21,13 @@ enum class Setup { UniformPeriodic, ClumpInHotGas, MixedActive, NearBoundaries, 
 struct Case {
   Setup setup;
   bool msph;
+  bool reconstruction = false;  // hydro.viscosity_reconstruction
 };
 
 std::string name(const testing::TestParamInfo<Case>& info) {
   const char* s[] = {"UniformPeriodic", "ClumpInHotGas", "MixedActive", "NearBoundaries", "OpenBoundaries"};
-  return std::string(s[static_cast<int>(info.param.setup)]) + (info.param.msph ? "_MSPH" : "_SPH");
+  return std::string(s[static_cast<int>(info.param.setup)]) + (info.param.msph ? "_MSPH" : "_SPH") +
+         (info.param.reconstruction ? "_Reconstructed" : "");
 }
 
 class HydroBruteForce : public testing::TestWithParam<Case> {};
@@ -66,6 +68,7 @@ TEST_P(HydroBruteForce, LoopsMatchDirectSummation) {
       break;
   }
   RunConfig cfg = test::test_config(periodic, box, c.msph);
+  cfg.hydro.viscosity_reconstruction = c.reconstruction;
   // The loops find the signal velocity only for the criterion that reads it.
   cfg.hydro.courant_criterion = CourantCriterion::SignalVelocity;
   Engine engine(cfg, g);
@@ -81,15 +84,19 @@ TEST_P(HydroBruteForce, LoopsMatchDirectSummation) {
 
   const GasParticles& gas = engine.gas();
   const test::BruteForce bf{gas, cfg.hydro, periodic, box};
-  double div_scale = 0, curl_scale = 0, a_scale = 0, du_scale = 0;
+  double div_scale = 0, curl_scale = 0, a_scale = 0, du_scale = 0, strain_scale = 0;
   for (std::size_t i = 0; i < gas.size(); ++i) {
+    strain_scale += norm(gas.strain_diagonal[i]) + norm(gas.strain_shear[i]);
     div_scale += std::fabs(gas.div_v[i]);
     curl_scale += norm(gas.curl_v[i]);
     a_scale += norm(gas.a_hydro[i]);
     du_scale += std::fabs(gas.du_dt[i]);
   }
   const double n = static_cast<double>(gas.size());
-  div_scale /= n, curl_scale /= n, a_scale /= n, du_scale /= n;
+  div_scale /= n, curl_scale /= n, a_scale /= n, du_scale /= n, strain_scale /= n;
+  // The strain rate is worked out only for the reconstruction, and then for every particle.
+  if (c.reconstruction) EXPECT_GT(strain_scale, 0.0);
+  else EXPECT_EQ(strain_scale, 0.0);
 
   std::size_t checked = 0, inactive = 0;
   for (std::size_t i = 0; i < gas.size(); ++i) {
@@ -105,6 +112,13 @@ TEST_P(HydroBruteForce, LoopsMatchDirectSummation) {
     expect_close(gas.div_v[i], ref.div_v, div_scale, "div v", gas.id[i]);
     for (int k = 0; k < 3; ++k) expect_close(gas.curl_v[i][k], ref.curl_v[k], curl_scale, "curl v", gas.id[i]);
     if (i % 7 == 0) expect_close(gas.h[i], bf.solve_h(i, gas.h[i]), 0.0, "h", gas.id[i]);
+    if (c.reconstruction) {
+      const hydro::StrainRate s = bf.strain(i, gas.h[i]);
+      for (int k = 0; k < 3; ++k) {
+        expect_close(gas.strain_diagonal[i][k], s.diagonal[k], strain_scale, "strain rate", gas.id[i]);
+        expect_close(gas.strain_shear[i][k], s.shear[k], strain_scale, "strain rate", gas.id[i]);
+      }
+    }
     const auto f = bf.force(i);
     for (int k = 0; k < 3; ++k) expect_close(gas.a_hydro[i][k], f.a[k], a_scale, "acceleration", gas.id[i]);
     expect_close(gas.du_dt[i], f.du_dt, du_scale, "du/dt", gas.id[i]);
@@ -136,7 +150,9 @@ INSTANTIATE_TEST_SUITE_P(AllSetups, HydroBruteForce,
                                          Case{Setup::ClumpInHotGas, false}, Case{Setup::ClumpInHotGas, true},
                                          Case{Setup::MixedActive, false}, Case{Setup::MixedActive, true},
                                          Case{Setup::NearBoundaries, false}, Case{Setup::NearBoundaries, true},
-                                         Case{Setup::OpenBoundaries, false}, Case{Setup::OpenBoundaries, true}),
+                                         Case{Setup::OpenBoundaries, false}, Case{Setup::OpenBoundaries, true},
+                                         Case{Setup::UniformPeriodic, true, true}, Case{Setup::ClumpInHotGas, true, true},
+                                         Case{Setup::MixedActive, false, true}),
                          name);
 
 // The floor of h (hydro.h_min_ratio): a particle whose neighbour number would need a smaller

@@ -935,7 +935,7 @@ TEST_F(IoTest, RestartRoundTripWithDarkMatterIsBitwise) {
   const auto s = restart_state(17, 29);
   const std::string path = file("restart.hdf5");
   fountain::io::write_restart(path, s);
-  EXPECT_EQ(fountain::io::kRestartFormatVersion, 9);
+  EXPECT_EQ(fountain::io::kRestartFormatVersion, 10);
   const auto r = fountain::io::read_restart(path);
 
   EXPECT_EQ(r.ti_current, s.ti_current);

@@ -326,7 +326,7 @@ void expect_sound_table(const char* store) {
     EXPECT_TRUE(keys.insert(field.key).second) << store << ": key " << field.key << " twice";
     EXPECT_TRUE(names.insert(field.name).second) << store << ": name " << field.name << " twice";
     if (field.snapshot != InSnapshots::never) {
-      EXPECT_FALSE(field.units.depends_on_sph_alpha) << store << ": " << field.key << " has no fixed units to write";
+      EXPECT_FALSE(field.units.depends_on_parameters) << store << ": " << field.key << " has no fixed units to write";
     }
     if ((field.messages & message::step_state) != 0) {
       EXPECT_NE(field.messages & message::whole_state, 0)

@@ -37,6 +37,12 @@ FOUNTAIN_VECTOR_CLONES void density_sums(StepContext& ctx, const Cell& a, const 
     gas.wcount_dh[i] += s.w_dh;
     gas.div_v[i] += s.div;
     gas.curl_v[i] += s.curl;
+    // Finished here, at this h: the ghost works it out again for a particle whose h it changes.
+    if (p.viscosity_reconstruction) {
+      const StrainRate strain = sum_strain_pairs(q, hi);
+      gas.strain_diagonal[i] = strain.diagonal;
+      gas.strain_shear[i] = strain.shear;
+    }
   });
 }
 
@@ -49,6 +55,7 @@ void density(StepContext& ctx, int ci) {
     if (!ctx.is_active(i)) continue;
     gas.rho[i] = gas.wcount[i] = gas.wcount_dh[i] = gas.div_v[i] = 0.0;
     gas.curl_v[i] = {};
+    gas.strain_diagonal[i] = gas.strain_shear[i] = {};
   }
   thread_local NeighbourBlock block;
   if (load_neighbourhood(ctx, ci, false, block)) density_sums(ctx, c, block);

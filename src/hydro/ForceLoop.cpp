@@ -14,11 +14,12 @@ void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p, doubl
   // |C'|/a^2 against c/h = c'/(a^2 h') (gamma = 5/3), i.e. D' + 3 a^2 H, |C'| and c'/h'.
   const double div_v = hubble_flow != 0.0 ? gas.div_v[i] + 3.0 * hubble_flow : gas.div_v[i];
   const ForceState s = make_force_state(gas.v[i], gas.mass[i], gas.rho[i], gas.u[i], gas.h[i], div_v,
-                                        gas.curl_v[i], p);
+                                        gas.curl_v[i], p, {gas.strain_diagonal[i], gas.strain_shear[i]});
   gas.soundspeed[i] = s.c;
   gas.p_over_rho_a[i] = s.p_over_rho_a;
   gas.inv_rho_2ma[i] = s.inv_rho_2ma;
   gas.balsara[i] = s.balsara;
+  gas.entropy[i] = s.entropy;
 }
 
 namespace {
@@ -35,11 +36,12 @@ void request_wake(GasParticles& gas, std::size_t j, int bin) {
 
 // Lists the pairs of particle i with the candidates near.hit[0 .. n): one plain loop with
 // every array behind a local pointer (through the thread's list the compiler reloaded each
-// array's address after every store).
+// array's address after every store). kStrain: j's strain rates too.
+template <bool kStrain>
 [[gnu::always_inline]] inline void list_force_pairs(const GasParticles& gas, const NeighbourBlock& near,
                                                     const std::uint32_t* hit, std::size_t n, const Vec3& xi,
                                                     const Vec3& vi, ForcePairs& q) {
-  q.reset(n);
+  q.reset(n, kStrain);
   double* __restrict dx = q.dx.data();
   double* __restrict dy = q.dy.data();
   double* __restrict dz = q.dz.data();
@@ -64,8 +66,24 @@ void request_wake(GasParticles& gas, std::size_t j, int bin) {
     dvx[p] = vi.x - v[j].x, dvy[p] = vi.y - v[j].y, dvz[p] = vi.z - v[j].z;
     m[p] = gas.mass[j], rho[p] = gas.rho[j], h[p] = gas.h[j], c[p] = gas.soundspeed[j];
     pa[p] = gas.p_over_rho_a[j], ir[p] = gas.inv_rho_2ma[j], bal[p] = gas.balsara[j];
+    if constexpr (kStrain) {
+      const Vec3 &d = gas.strain_diagonal[j], &o = gas.strain_shear[j];
+      q.entropy[p] = gas.entropy[j];
+      q.sxx[p] = d.x, q.syy[p] = d.y, q.szz[p] = d.z, q.sxy[p] = o.x, q.sxz[p] = o.y, q.syz[p] = o.z;
+    }
   }
   q.n = n;
+}
+
+// Particle i's force sums with the loop's options as template arguments.
+template <bool kReconstruct>
+[[gnu::always_inline]] inline ForceSums force_pair_sums(const ForceState& fi, ForcePairs& q, const HydroParams& p,
+                                                        bool signal_velocity, double hubble_flow) {
+  if (hubble_flow != 0.0)
+    return signal_velocity ? sum_force_pairs<true, true, kReconstruct>(fi, q, p, hubble_flow)
+                           : sum_force_pairs<false, true, kReconstruct>(fi, q, p, hubble_flow);
+  return signal_velocity ? sum_force_pairs<true, false, kReconstruct>(fi, q, p)
+                         : sum_force_pairs<false, false, kReconstruct>(fi, q, p);
 }
 
 FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const NeighbourBlock& block) {
@@ -73,6 +91,7 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
   const HydroParams& p = ctx.hydro;
   const bool msph = p.msph, limiter = p.timestep_limiter;
   const bool signal_velocity = p.courant_criterion == CourantCriterion::SignalVelocity;
+  const bool reconstruct = p.viscosity_reconstruction;
   const int limiter_bins = p.limiter_bins;
   const double hubble_flow = ctx.expansion.hubble_flow;
   thread_local ForcePairs q;  // the pairs of one particle at a time
@@ -105,11 +124,14 @@ FOUNTAIN_VECTOR_CLONES void force_sums(StepContext& ctx, const Cell& a, const Ne
         kept += near.index[k] != i ? 1 : 0;
       }
     }
-    list_force_pairs(gas, near, hit, kept, xi, fi.v, q);
-    const ForceSums s = hubble_flow != 0.0 ? (signal_velocity ? sum_force_pairs<true, true>(fi, q, p, hubble_flow)
-                                                              : sum_force_pairs<false, true>(fi, q, p, hubble_flow))
-                        : signal_velocity ? sum_force_pairs<true>(fi, q, p)
-                                          : sum_force_pairs<false>(fi, q, p);
+    ForceSums s;
+    if (reconstruct) {
+      list_force_pairs<true>(gas, near, hit, kept, xi, fi.v, q);
+      s = force_pair_sums<true>(fi, q, p, signal_velocity, hubble_flow);
+    } else {
+      list_force_pairs<false>(gas, near, hit, kept, xi, fi.v, q);
+      s = force_pair_sums<false>(fi, q, p, signal_velocity, hubble_flow);
+    }
     gas.a_hydro[i] += s.a;
     gas.du_dt[i] += s.du_dt;
     if (signal_velocity) gas.v_sig[i] = std::max(gas.v_sig[i], s.v_sig);

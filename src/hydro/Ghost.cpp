@@ -51,6 +51,7 @@ void gather_candidates(const StepContext& ctx, int ci, std::size_t i, double rad
 
 // The density sums at smoothing length h over the listed pairs (those beyond h add nothing).
 FOUNTAIN_VECTOR_CLONES DensitySums sums_at(DensityPairs& pairs, double h) { return sum_density_pairs(pairs, h); }
+FOUNTAIN_VECTOR_CLONES StrainRate strain_at(DensityPairs& pairs, double h) { return sum_strain_pairs(pairs, h); }
 
 }  // namespace
 
@@ -120,6 +121,12 @@ void ghost(StepContext& ctx, int ci) {
           res = finish_density(sums_at(cand, h), h);
           ctx.h_min_held.fetch_add(1, std::memory_order_relaxed);
         }
+      }
+      // `cand` holds every coupled neighbour within the final h.
+      if (p.viscosity_reconstruction) {
+        const StrainRate strain = strain_at(cand, h);
+        gas.strain_diagonal[i] = strain.diagonal;
+        gas.strain_shear[i] = strain.shear;
       }
     }
     gas.h[i] = h;

@@ -55,6 +55,94 @@ inline DensityResult finish_density(const DensitySums& s, double h) {
   return r;
 }
 
+// ---------------------------------------------------------------- velocity gradient
+
+// The symmetric part S of a particle's velocity gradient (per unit length of the position
+// variable), kept for the viscosity's reconstruction (hydro.viscosity_reconstruction): only
+// x^T S x enters it, and the antisymmetric part (rotation) adds nothing to that.
+struct StrainRate {
+  Vec3 diagonal;  // S_xx, S_yy, S_zz
+  Vec3 shear;     // S_xy, S_xz, S_yz
+};
+
+// x^T S x: the rate at which the flow about the particle stretches the separation x.
+inline double stretch(const StrainRate& s, double x, double y, double z) {
+  return s.diagonal.x * x * x + s.diagonal.y * y * y + s.diagonal.z * z * z +
+         2.0 * (s.shear.x * x * y + s.shear.y * x * z + s.shear.z * y * z);
+}
+
+// Sums for particle i's velocity gradient, with w_ij = m_j W'(r_ij, h_i) / r_ij, dx = x_i - x_j,
+// dv = v_i - v_j: D = sum w dv dx^T and C = sum w dx dx^T. G = D C^-1 is exact for any linear
+// velocity field whatever the neighbours' arrangement (C corrects the kernel's first moment),
+// which the plain SPH estimate is not on a stretched lattice.
+struct GradientSums {
+  double d[9]{};  // D, row-major: d[3a + b] = sum w dv_a dx_b
+  double c[6]{};  // C: xx, yy, zz, xy, xz, yz
+};
+
+inline void iact_gradient(const Vec3& dx, const Vec3& dv, double r2, double hi_inv, double mj, GradientSums& s) {
+  const double r = std::sqrt(r2);
+  if (r == 0.0) return;
+  const double w = mj * kernel::derivative(r, hi_inv) / r;
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) s.d[3 * a + b] += w * dv[a] * dx[b];
+  s.c[0] += w * dx.x * dx.x, s.c[1] += w * dx.y * dx.y, s.c[2] += w * dx.z * dx.z;
+  s.c[3] += w * dx.x * dx.y, s.c[4] += w * dx.x * dx.z, s.c[5] += w * dx.y * dx.z;
+}
+
+// S = sym(D C^-1). Neighbours (nearly) in a plane or on a line leave C singular: then S = 0,
+// and the viscosity is the plain one.
+inline StrainRate strain_rate(const GradientSums& s) {
+  const double cxx = s.c[0], cyy = s.c[1], czz = s.c[2], cxy = s.c[3], cxz = s.c[4], cyz = s.c[5];
+  // The adjugate of C (symmetric) and its determinant.
+  const double ixx = cyy * czz - cyz * cyz, iyy = cxx * czz - cxz * cxz, izz = cxx * cyy - cxy * cxy;
+  const double ixy = cxz * cyz - cxy * czz, ixz = cxy * cyz - cxz * cyy, iyz = cxy * cxz - cxx * cyz;
+  const double det = cxx * ixx + cxy * ixy + cxz * ixz;
+  const double mean = (cxx + cyy + czz) / 3.0;
+  if (!(std::fabs(det) > 1e-3 * std::fabs(mean * mean * mean))) return {};
+  const double inv[9] = {ixx / det, ixy / det, ixz / det, ixy / det, iyy / det, iyz / det, ixz / det, iyz / det, izz / det};
+  double g[9];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b)
+      g[3 * a + b] = s.d[3 * a] * inv[b] + s.d[3 * a + 1] * inv[3 + b] + s.d[3 * a + 2] * inv[6 + b];
+  return {{g[0], g[4], g[8]}, {0.5 * (g[1] + g[3]), 0.5 * (g[2] + g[6]), 0.5 * (g[5] + g[7])}};
+}
+
+// The approach w = v_ij . x_ij that the viscosity sees once each side's velocity is carried to
+// the pair's midpoint along its own gradient (Christensen 1990; Frontiere, Raskin & Owen 2017;
+// Rosswog 2020), from the pair's w and the two slopes s_i = x_ij^T S_i x_ij, s_j likewise
+// (the Hubble flow's a^2 H r^2 included in a comoving run). The van Leer limiter
+// 4 s_i s_j / (s_i + s_j)^2 keeps the whole reconstruction where the slopes agree (a smooth
+// flow, whose linear part then leaves no viscosity) and none where they differ in sign (a
+// shock). The reconstruction only ever weakens the viscosity: the result lies in [w, 0].
+// Symmetric in i and j, so pair forces stay antisymmetric.
+//
+// A smeared shock front can look smooth to the limiter (both sides already compressing), so
+// the reconstruction is also withdrawn where the pair's pressures differ by more than
+// adiabatic compression explains: `shock` in [0, 1] is the share of it kept
+// (shock_weight), 1 for a pair of one entropy, towards 0 across an entropy jump that matters
+// against the approach's ram pressure.
+inline double reconstructed_approach(double vr, double si, double sj, double shock = 1.0) {
+  const double prod = si * sj, sum = si + sj;
+  const double limiter = prod > 0.0 ? 4.0 * prod / (sum * sum) : 0.0;
+  const double w = vr - 0.5 * shock * limiter * sum;
+  return vr < 0.0 ? std::min(0.0, std::max(vr, w)) : vr;
+}
+
+// The share of the reconstruction a pair keeps: with entropy functions K = P / rho^gamma and
+// pressures P_i, P_j, the pressure difference that is not adiabatic,
+// dP = (P_i + P_j) |K_i - K_j| / (K_i + K_j), against the ram pressure of the approach
+// rho_ij w^2 (w = v_ij . x_ij / r_ij): (ram / (ram + dP))^4. Cold gas heated a little keeps
+// it (its pressure is nothing against the flow's), a shock front's hot-cold pairs lose it.
+// Both are comoving or both physical with the same power of a (gamma = 5/3).
+inline double shock_weight(double ki, double kj, double pi, double pj, double rho_ij, double vr, double r2) {
+  const double ksum = ki + kj;
+  const double dp = ksum > 0.0 ? (pi + pj) * std::fabs(ki - kj) / ksum : 0.0;
+  const double ram = r2 > 0.0 ? rho_ij * vr * vr / r2 : 0.0;
+  const double x = ram > 0.0 ? ram / (ram + dp) : 1.0;
+  return (x * x) * (x * x);
+}
+
 // ---------------------------------------------------------------- the MSPH rule
 
 // What the MSPH rule reads of a particle: frozen predicted values for the whole step.
@@ -113,18 +201,24 @@ inline double rho_power(double rho, double a) {
 struct ForceState {
   Vec3 v;
   double m, rho, h, c, p_over_rho_a, inv_rho_2ma, balsara;
+  // Read only with hydro.viscosity_reconstruction.
+  double entropy;  // K = P / rho^gamma
+  StrainRate strain;
 };
 
 inline ForceState make_force_state(const Vec3& v, double m, double rho, double u, double h,
-                                   double div_v, const Vec3& curl_v, const HydroParams& p) {
+                                   double div_v, const Vec3& curl_v, const HydroParams& p,
+                                   const StrainRate& strain = {}) {
   ForceState s;
   s.v = v;
+  s.strain = strain;
   s.m = m;
   s.rho = rho;
   s.h = h;
   s.c = sound_speed(rho, u, p.gamma);
   s.p_over_rho_a = pressure(rho, u, p.gamma) / rho_power(rho, p.sph_alpha);
   s.inv_rho_2ma = 1.0 / rho_power(rho, 2.0 - p.sph_alpha);
+  s.entropy = p.viscosity_reconstruction && rho > 0.0 ? pressure(rho, u, p.gamma) / std::pow(rho, p.gamma) : 0.0;
   const double adiv = std::fabs(div_v);
   const double denom = adiv + norm(curl_v) + 1e-4 * s.c / h;
   s.balsara = denom > 0.0 ? adiv / denom : 0.0;
@@ -156,7 +250,15 @@ inline void iact_force(const ForceState& i, const ForceState& j, const Vec3& dx,
 
   const Vec3 dv = i.v - j.v;
   const double h_ij = 0.5 * (i.h + j.h);
-  const double mu = mu_ij(dx, dv, r2, h_ij);
+  double vr_visc = dot(dv, dx);
+  if (p.viscosity_reconstruction) {
+    const double inv_gamma = 1.0 / p.gamma;
+    const double shock = shock_weight(i.entropy, j.entropy, i.rho * i.c * i.c * inv_gamma, j.rho * j.c * j.c * inv_gamma,
+                                      0.5 * (i.rho + j.rho), vr_visc, r2);
+    vr_visc = reconstructed_approach(vr_visc, stretch(i.strain, dx.x, dx.y, dx.z), stretch(j.strain, dx.x, dx.y, dx.z),
+                                     shock);
+  }
+  const double mu = vr_visc < 0.0 ? h_ij * vr_visc / (r2 + 0.01 * h_ij * h_ij) : 0.0;
   const double c_ij = 0.5 * (i.c + j.c);
   double visc = 0.0;
   if (mu < 0.0) {
@@ -257,6 +359,46 @@ struct DensityPairs {
   return lanes.total();
 }
 
+struct GradientLanes {
+  double d[9][kLanes]{}, c[6][kLanes]{};
+
+  GradientSums total() const {
+    GradientSums s;
+    for (int k = 0; k < 9; ++k) s.d[k] = DensityLanes::add(d[k]);
+    for (int k = 0; k < 6; ++k) s.c[k] = DensityLanes::add(c[k]);
+    return s;
+  }
+};
+
+// The velocity-gradient sums of the batch b .. b + 3 (iact_gradient's arithmetic).
+[[gnu::always_inline]] inline void iact_gradient_lanes(const DensityPairs& q, std::size_t b, double hi, GradientLanes& s) {
+  const double hi_inv = 1.0 / hi;
+  const double hi2 = hi * hi;
+  const double h4 = kernel::norm * hi_inv * hi_inv * hi_inv * hi_inv;
+  const double *qdx = q.dx.data() + b, *qdy = q.dy.data() + b, *qdz = q.dz.data() + b, *qr2 = q.r2.data() + b;
+  const double *qvx = q.dvx.data() + b, *qvy = q.dvy.data() + b, *qvz = q.dvz.data() + b, *qm = q.m.data() + b;
+  for (int l = 0; l < kLanes; ++l) {
+    const double r = std::sqrt(qr2[l]);
+    const double u = r * hi_inv;
+    const double t = 1.0 - u;
+    const double dw = qr2[l] < hi2 ? h4 * (u < 0.5 ? -12.0 * u + 18.0 * u * u : -6.0 * t * t) : 0.0;
+    const double w = r > 0.0 ? qm[l] * dw / r : 0.0;
+    const double dx[3] = {qdx[l], qdy[l], qdz[l]}, dv[3] = {qvx[l], qvy[l], qvz[l]};
+    for (int a = 0; a < 3; ++a)
+      for (int c = 0; c < 3; ++c) s.d[3 * a + c][l] += w * dv[a] * dx[c];
+    s.c[0][l] += w * dx[0] * dx[0], s.c[1][l] += w * dx[1] * dx[1], s.c[2][l] += w * dx[2] * dx[2];
+    s.c[3][l] += w * dx[0] * dx[1], s.c[4][l] += w * dx[0] * dx[2], s.c[5][l] += w * dx[1] * dx[2];
+  }
+}
+
+// Particle i's strain rate over its listed pairs (h_i: its smoothing length).
+[[gnu::always_inline]] inline StrainRate sum_strain_pairs(DensityPairs& q, double hi) {
+  GradientLanes lanes;
+  const std::size_t end = q.pad(hi);
+  for (std::size_t b = 0; b < end; b += kLanes) iact_gradient_lanes(q, b, hi, lanes);
+  return strain_rate(lanes.total());
+}
+
 struct ForceLanes {
   double ax[kLanes]{}, ay[kLanes]{}, az[kLanes]{}, du_dt[kLanes]{}, v_sig[kLanes]{};
 
@@ -273,12 +415,16 @@ struct ForceLanes {
 struct ForcePairs {
   ScratchArray<double> dx, dy, dz, r2, dvx, dvy, dvz;
   ScratchArray<double> m, rho, h, c, p_over_rho_a, inv_rho_2ma, balsara;
+  // j's entropy and strain rate, listed only for the viscosity's reconstruction.
+  ScratchArray<double> entropy, sxx, syy, szz, sxy, sxz, syz;
   std::size_t n = 0;
 
-  void reset(std::size_t most) {
+  void reset(std::size_t most, bool strain = false) {
     n = 0;
     for (auto* a : {&dx, &dy, &dz, &r2, &dvx, &dvy, &dvz, &m, &rho, &h, &c, &p_over_rho_a, &inv_rho_2ma, &balsara})
       a->ensure(most + kLanes);
+    if (strain)
+      for (auto* a : {&entropy, &sxx, &syy, &szz, &sxy, &sxz, &syz}) a->ensure(most + kLanes);
   }
   void add(const Vec3& d, const Vec3& dv, double r2_value, const ForceState& j) {
     dx[n] = d.x, dy[n] = d.y, dz[n] = d.z, r2[n] = r2_value;
@@ -287,12 +433,19 @@ struct ForcePairs {
     p_over_rho_a[n] = j.p_over_rho_a, inv_rho_2ma[n] = j.inv_rho_2ma, balsara[n] = j.balsara;
     ++n;
   }
-  std::size_t pad() {
+  void add_strain(double entropy_j, const StrainRate& s) {
+    const std::size_t k = n - 1;
+    entropy[k] = entropy_j;
+    sxx[k] = s.diagonal.x, syy[k] = s.diagonal.y, szz[k] = s.diagonal.z;
+    sxy[k] = s.shear.x, sxz[k] = s.shear.y, syz[k] = s.shear.z;
+  }
+  std::size_t pad(bool strain = false) {
     std::size_t k = n;
     for (; k % kLanes != 0; ++k) {
       dx[k] = dy[k] = dz[k] = dvx[k] = dvy[k] = dvz[k] = m[k] = c[k] = 0.0;
       p_over_rho_a[k] = inv_rho_2ma[k] = balsara[k] = 0.0;
       r2[k] = rho[k] = h[k] = 1.0;
+      if (strain) entropy[k] = sxx[k] = syy[k] = szz[k] = sxy[k] = sxz[k] = syz[k] = 0.0;
     }
     return k;
   }
@@ -303,11 +456,15 @@ struct ForcePairs {
 // kComoving: a comoving run's pairs (docs/physics.md §11): viscosity, its heating and the
 // signal velocity take the pair velocity with the Hubble flow, w = v'_ij . x_ij + a^2 H r^2;
 // the pressure term of the energy equation the peculiar v'_ij alone.
-template <bool kSignalVelocity, bool kComoving = false>
+// kReconstruct: the viscosity sees the reconstructed approach (reconstructed_approach), the
+// slopes from the listed strain rates (plus a^2 H r^2 when comoving); its heating the pair's
+// own w, so the energy it takes from the motion is what it gives the gas.
+template <bool kSignalVelocity, bool kComoving = false, bool kReconstruct = false>
 [[gnu::always_inline]] inline void iact_force_lanes(const ForceState& i, const ForcePairs& q, std::size_t b, const HydroParams& p,
                              ForceLanes& s, double hubble_flow = 0.0) {
   const double hi_inv = 1.0 / i.h;
   const double alpha = p.viscosity_alpha;
+  const double inv_gamma = 1.0 / p.gamma;
   const double *qdx = q.dx.data() + b, *qdy = q.dy.data() + b, *qdz = q.dz.data() + b, *qr2 = q.r2.data() + b;
   const double *qvx = q.dvx.data() + b, *qvy = q.dvy.data() + b, *qvz = q.dvz.data() + b;
   const double *qm = q.m.data() + b, *qrho = q.rho.data() + b, *qh = q.h.data() + b, *qc = q.c.data() + b;
@@ -329,7 +486,16 @@ template <bool kSignalVelocity, bool kComoving = false>
     const double vr_peculiar = qvx[l] * qdx[l] + qvy[l] * qdy[l] + qvz[l] * qdz[l];
     const double vr = kComoving ? vr_peculiar + hubble_flow * r2 : vr_peculiar;
     const double h_ij = 0.5 * (i.h + qh[l]);
-    const double mu = vr < 0.0 ? h_ij * vr / (r2 + 0.01 * h_ij * h_ij) : 0.0;
+    double vr_visc = vr;
+    if constexpr (kReconstruct) {
+      const double x = qdx[l], y = qdy[l], z = qdz[l];
+      const StrainRate sj{{q.sxx[b + l], q.syy[b + l], q.szz[b + l]}, {q.sxy[b + l], q.sxz[b + l], q.syz[b + l]}};
+      const double hubble = kComoving ? hubble_flow * r2 : 0.0;
+      const double shock = shock_weight(i.entropy, q.entropy[b + l], i.rho * i.c * i.c * inv_gamma,
+                                        qrho[l] * qc[l] * qc[l] * inv_gamma, 0.5 * (i.rho + qrho[l]), vr, r2);
+      vr_visc = reconstructed_approach(vr, stretch(i.strain, x, y, z) + hubble, stretch(sj, x, y, z) + hubble, shock);
+    }
+    const double mu = vr_visc < 0.0 ? h_ij * vr_visc / (r2 + 0.01 * h_ij * h_ij) : 0.0;
     const double c_ij = 0.5 * (i.c + qc[l]);
     const double visc = mu < 0.0 ? (-alpha * c_ij * mu + 2.0 * alpha * mu * mu) / (0.5 * (i.rho + qrho[l])) *
                                        (0.5 * (i.balsara + qbal[l]))
@@ -350,13 +516,13 @@ template <bool kSignalVelocity, bool kComoving = false>
 }
 
 // Particle i's force sums over its listed pairs.
-template <bool kSignalVelocity, bool kComoving = false>
+template <bool kSignalVelocity, bool kComoving = false, bool kReconstruct = false>
 [[gnu::always_inline]] inline ForceSums sum_force_pairs(const ForceState& i, ForcePairs& q, const HydroParams& p,
                                                          double hubble_flow = 0.0) {
   ForceLanes lanes;
-  const std::size_t end = q.pad();
+  const std::size_t end = q.pad(kReconstruct);
   for (std::size_t b = 0; b < end; b += kLanes)
-    iact_force_lanes<kSignalVelocity, kComoving>(i, q, b, p, lanes, hubble_flow);
+    iact_force_lanes<kSignalVelocity, kComoving, kReconstruct>(i, q, b, p, lanes, hubble_flow);
   return lanes.total();
 }
 

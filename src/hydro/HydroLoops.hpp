@@ -29,8 +29,10 @@ void prepare_force(GasParticles& gas, std::size_t i, const HydroParams& p, doubl
 
 // Particle i's force inputs, as prepared.
 inline ForceState force_state(const GasParticles& gas, std::size_t i) {
-  return {gas.v[i], gas.mass[i], gas.rho[i], gas.h[i], gas.soundspeed[i], gas.p_over_rho_a[i],
-          gas.inv_rho_2ma[i], gas.balsara[i]};
+  return {gas.v[i],           gas.mass[i],        gas.rho[i],
+          gas.h[i],           gas.soundspeed[i],  gas.p_over_rho_a[i],
+          gas.inv_rho_2ma[i], gas.balsara[i],     gas.entropy[i],
+          {gas.strain_diagonal[i], gas.strain_shear[i]}};
 }
 
 }  // namespace fountain::hydro

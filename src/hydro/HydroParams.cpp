@@ -15,6 +15,7 @@ HydroParams HydroParams::from(const ParameterFile& p) {
   h.neighbours_tolerance = p.real("hydro.neighbours_tolerance");
   h.sph_alpha = p.real("hydro.sph_alpha");
   h.viscosity_alpha = p.real("hydro.viscosity_alpha");
+  h.viscosity_reconstruction = p.flag("hydro.viscosity_reconstruction");
   h.courant = p.real("hydro.courant");
   h.courant_criterion = p.text("time_integration.courant_criterion") == "signal_velocity"
                             ? CourantCriterion::SignalVelocity

@@ -14,6 +14,9 @@ struct HydroParams {
   double neighbours_tolerance = 1.0;
   double sph_alpha = 1.5;
   double viscosity_alpha = 1.3;
+  // The viscosity sees each pair's velocities reconstructed to the pair's midpoint along
+  // their gradients, with a slope limiter: none in smooth flows, all of it in shocks.
+  bool viscosity_reconstruction = false;
   double courant = 0.1;
   CourantCriterion courant_criterion = CourantCriterion::Syw;
   bool msph = true;

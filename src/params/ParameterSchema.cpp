@@ -131,6 +131,10 @@ const std::vector<ParamSpec>& parameter_schema() {
            "Accepted deviation of the weighted neighbour number from N_ngb.", true),
       real("hydro.sph_alpha", "1.5", 0, 2, "Power alpha of the momentum equation (the paper: 3/2)."),
       real("hydro.viscosity_alpha", "1.3", 0, 10, "Artificial-viscosity alpha_v."),
+      boolean("hydro.viscosity_reconstruction", "false",
+              "The viscosity sees each pair's velocities carried to the pair's midpoint along their (linearly exact) "
+              "gradients with a van Leer slope limiter: no viscosity where the flow is smooth, all of it in shocks. "
+              "false: the paper's viscosity, acting on every approaching pair."),
       real("hydro.courant", "0.1", 0, 1, "Courant factor alpha_c.", true),
       boolean("hydro.msph", "true", "Multiphase SPH neighbour rule (paper eqs 4-6); false gives standard SPH."),
       real("hydro.msph_A", "10", 1, inf, "Density-contrast threshold A of the MSPH rule."),

@@ -14,9 +14,10 @@ namespace fountain {
 struct Dimensions {
   double mass = 0, length = 0, time = 0;
   double a = 0, a_gamma = 0, a_gamma_minus_1 = 0;
-  // The force loop's factors P / rho^alpha and 1 / rho^(2 - alpha) take powers that depend on
-  // hydro.sph_alpha (their descriptions give them); such a field cannot be written to snapshots.
-  bool depends_on_sph_alpha = false;
+  // The force loop's factors P / rho^alpha and 1 / rho^(2 - alpha) and the entropy function
+  // P / rho^gamma take powers that depend on hydro.sph_alpha or hydro.gamma (their descriptions
+  // give them); such a field cannot be written to snapshots.
+  bool depends_on_parameters = false;
 };
 
 // The power of a for a run with adiabatic index `gamma` (each term in SWIFT's form, so that

@@ -49,12 +49,16 @@ struct GasParticles {
   std::vector<double> wcount_dh;      // d wcount / dh
   std::vector<double> div_v;
   std::vector<Vec3> curl_v;
+  // The symmetric part of the velocity gradient (with hydro.viscosity_reconstruction; else 0).
+  std::vector<Vec3> strain_diagonal;  // S_xx, S_yy, S_zz
+  std::vector<Vec3> strain_shear;     // S_xy, S_xz, S_yz
 
   // Prepared for the force loop from the predicted state (after each drift and ghost).
   std::vector<double> soundspeed;     // sqrt(gamma (gamma-1) u): depends on u only
   std::vector<double> p_over_rho_a;   // P / rho^alpha of the momentum equation
   std::vector<double> inv_rho_2ma;    // 1 / rho^(2-alpha)
   std::vector<double> balsara;        // Balsara switch f_i
+  std::vector<double> entropy;        // P / rho^gamma (with hydro.viscosity_reconstruction; else 0)
 
   // Force-loop results.
   std::vector<Vec3> a_hydro;

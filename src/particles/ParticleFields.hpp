@@ -34,7 +34,8 @@ inline constexpr Dimensions kSpecificEnergy{.length = 2, .time = -2, .a_gamma_mi
 inline constexpr Dimensions kSpecificEnergyRate{.length = 2, .time = -3, .a_gamma_minus_1 = -3};
 inline constexpr Dimensions kSoundSpeed{.length = 1, .time = -1, .a_gamma_minus_1 = -1.5};
 inline constexpr Dimensions kPotential{.length = 2, .time = -2, .a = -1};  // SWIFT: potentials scale as 1/a
-inline constexpr Dimensions kSphAlphaDependent{.depends_on_sph_alpha = true};
+inline constexpr Dimensions kSphAlphaDependent{.depends_on_parameters = true};
+inline constexpr Dimensions kGammaDependent{.depends_on_parameters = true};
 }  // namespace field_units
 
 // clang-format off
@@ -115,6 +116,12 @@ inline constexpr auto kGasFields = [] {
     field(&G::curl_v, {.key = "curl_v", .name = "VelocityCurl", .units = kRate,
                        .description = "SPH velocity curls of the particles",
                        .messages = kStepped | ghost_density}),
+    field(&G::strain_diagonal, {.key = "strain_diagonal", .name = "StrainRateDiagonal", .units = kRate,
+                                .description = "Diagonal of the symmetric part of the velocity gradients (S_xx, S_yy, S_zz; zero without hydro.viscosity_reconstruction)",
+                                .messages = kStepped | ghost_density}),
+    field(&G::strain_shear, {.key = "strain_shear", .name = "StrainRateShear", .units = kRate,
+                             .description = "Off-diagonal entries of the symmetric part of the velocity gradients (S_xy, S_xz, S_yz; zero without hydro.viscosity_reconstruction)",
+                             .messages = kStepped | ghost_density}),
     // Prepared for the force loop from the predicted state.
     field(&G::soundspeed, {.key = "soundspeed", .name = "SoundSpeed", .units = kSoundSpeed,
                            .description = "Sound speeds sqrt(gamma (gamma - 1) u) of the particles",
@@ -127,6 +134,9 @@ inline constexpr auto kGasFields = [] {
                             .derived = true, .messages = kStepped | ghost_force_inputs}),
     field(&G::balsara, {.key = "balsara", .name = "BalsaraSwitch", .units = kNumber,
                         .description = "Balsara switches of the particles",
+                        .derived = true, .messages = kStepped | ghost_force_inputs}),
+    field(&G::entropy, {.key = "entropy", .name = "EntropyFunction", .units = kGammaDependent,
+                        .description = "Entropy functions P / rho^gamma of the particles (units M^(1-gamma) L^(3 gamma-1) t^-2; zero without hydro.viscosity_reconstruction)",
                         .derived = true, .messages = kStepped | ghost_force_inputs}),
     // Force-loop results.
     field(&G::a_hydro, {.key = "a_hydro", .name = "HydroAcceleration", .units = kAcceleration,
