@@ -101,6 +101,9 @@ TEST(ViscosityReconstruction, LimitedApproach) {
   // Slopes of opposite sign (a jump between them) or a flat side: the pair's own approach.
   EXPECT_EQ(hydro::reconstructed_approach(-2.0, -1.0, 1.0), -2.0);
   EXPECT_EQ(hydro::reconstructed_approach(-2.0, 0.0, -3.0), -2.0);
+  // The shock fraction scales the shift by x^4: with x = 1/2, a sixteenth of it.
+  EXPECT_NEAR(hydro::reconstructed_approach(-2.0, -2.0, -2.0, {1.0, 2.0}), -2.0 + 2.0 / 16.0, 1e-15);
+  EXPECT_EQ(hydro::reconstructed_approach(-2.0, -2.0, -2.0, {0.0, 2.0}), -2.0);
   // Receding pairs are left alone; the result never exceeds the approach nor turns it round.
   EXPECT_EQ(hydro::reconstructed_approach(1.5, 1.0, 1.0), 1.5);
   std::mt19937_64 rng(3);
@@ -118,12 +121,18 @@ TEST(ViscosityReconstruction, LimitedApproach) {
 
 // One entropy: the whole reconstruction; a pressure jump that matters against the approach's
 // ram pressure: almost none; a cold pair heated slightly (its pressures far below the ram's): nearly all.
+double shock_weight(double ki, double kj, double pi, double pj, double rho_ij, double vr, double r2) {
+  const hydro::ShockFraction f = hydro::shock_fraction(ki, kj, pi, pj, rho_ij, vr, r2);
+  const double x = f.num / f.den;
+  return x * x * x * x;
+}
+
 TEST(ViscosityReconstruction, ShockWeight) {
   const double r2 = 0.04, vr = -0.2;  // approach 1 at density 1: ram pressure 1
-  EXPECT_EQ(hydro::shock_weight(2.0, 2.0, 5.0, 7.0, 1.0, vr, r2), 1.0);
-  EXPECT_LT(hydro::shock_weight(100.0, 1.0, 10.0, 0.1, 1.0, vr, r2), 1e-3);
-  EXPECT_GT(hydro::shock_weight(1.0, 1.5, 1e-4, 1.5e-4, 1.0, vr, r2), 0.999);
-  EXPECT_EQ(hydro::shock_weight(1.0, 3.0, 1.0, 3.0, 1.0, vr, r2), hydro::shock_weight(3.0, 1.0, 3.0, 1.0, 1.0, vr, r2));
+  EXPECT_EQ(shock_weight(2.0, 2.0, 5.0, 7.0, 1.0, vr, r2), 1.0);
+  EXPECT_LT(shock_weight(100.0, 1.0, 10.0, 0.1, 1.0, vr, r2), 1e-3);
+  EXPECT_GT(shock_weight(1.0, 1.5, 1e-4, 1.5e-4, 1.0, vr, r2), 0.999);
+  EXPECT_EQ(shock_weight(1.0, 3.0, 1.0, 3.0, 1.0, vr, r2), shock_weight(3.0, 1.0, 3.0, 1.0, 1.0, vr, r2));
 }
 
 hydro::ForceState state(const Vec3& v, double u, const hydro::StrainRate& strain, const HydroParams& p) {

@@ -119,28 +119,32 @@ inline StrainRate strain_rate(const GradientSums& s) {
 //
 // A smeared shock front can look smooth to the limiter (both sides already compressing), so
 // the reconstruction is also withdrawn where the pair's pressures differ by more than
-// adiabatic compression explains: `shock` in [0, 1] is the share of it kept
-// (shock_weight), 1 for a pair of one entropy, towards 0 across an entropy jump that matters
-// against the approach's ram pressure.
-inline double reconstructed_approach(double vr, double si, double sj, double shock = 1.0) {
-  const double prod = si * sj, sum = si + sj;
-  const double limiter = prod > 0.0 ? 4.0 * prod / (sum * sum) : 0.0;
-  const double w = vr - 0.5 * shock * limiter * sum;
-  return vr < 0.0 ? std::min(0.0, std::max(vr, w)) : vr;
+// adiabatic compression explains: with entropy functions K = P / rho^gamma and pressures
+// P_i, P_j, the pressure difference that is not adiabatic, dP = (P_i + P_j) |K_i - K_j| /
+// (K_i + K_j), against the ram pressure of the approach, ram = rho_ij w^2 / r^2: the pair keeps
+// the share x^4 of the reconstruction, x = ram / (ram + dP). Cold gas heated a little keeps it
+// (its pressure is nothing against the flow's), a shock front's hot-cold pairs lose it. Both
+// are comoving or both physical with the same power of a (gamma = 5/3).
+// x is passed as a fraction num / den (both sides times r^2 (K_i + K_j)) so that a pair costs
+// one division.
+struct ShockFraction {
+  double num, den;
+};
+
+inline ShockFraction shock_fraction(double ki, double kj, double pi, double pj, double rho_ij, double vr, double r2) {
+  const double ram = rho_ij * vr * vr * (ki + kj);
+  return {ram, ram + (pi + pj) * std::fabs(ki - kj) * r2};
 }
 
-// The share of the reconstruction a pair keeps: with entropy functions K = P / rho^gamma and
-// pressures P_i, P_j, the pressure difference that is not adiabatic,
-// dP = (P_i + P_j) |K_i - K_j| / (K_i + K_j), against the ram pressure of the approach
-// rho_ij w^2 (w = v_ij . x_ij / r_ij): (ram / (ram + dP))^4. Cold gas heated a little keeps
-// it (its pressure is nothing against the flow's), a shock front's hot-cold pairs lose it.
-// Both are comoving or both physical with the same power of a (gamma = 5/3).
-inline double shock_weight(double ki, double kj, double pi, double pj, double rho_ij, double vr, double r2) {
-  const double ksum = ki + kj;
-  const double dp = ksum > 0.0 ? (pi + pj) * std::fabs(ki - kj) / ksum : 0.0;
-  const double ram = r2 > 0.0 ? rho_ij * vr * vr / r2 : 0.0;
-  const double x = ram > 0.0 ? ram / (ram + dp) : 1.0;
-  return (x * x) * (x * x);
+inline double reconstructed_approach(double vr, double si, double sj, ShockFraction shock = {1.0, 1.0}) {
+  const double prod = si * sj, sum = si + sj;
+  // limiter (s_i + s_j) / 2 = 2 s_i s_j / (s_i + s_j); 1 / (s_i + s_j) and x from one division.
+  const double q = 1.0 / (sum * shock.den);
+  const double x = shock.num * sum * q;
+  const double x2 = x * x;
+  const double shift = prod > 0.0 && shock.den > 0.0 ? 2.0 * prod * shock.den * q * (x2 * x2) : 0.0;
+  const double w = vr - shift;
+  return vr < 0.0 ? std::min(0.0, std::max(vr, w)) : vr;
 }
 
 // ---------------------------------------------------------------- the MSPH rule
@@ -253,8 +257,8 @@ inline void iact_force(const ForceState& i, const ForceState& j, const Vec3& dx,
   double vr_visc = dot(dv, dx);
   if (p.viscosity_reconstruction) {
     const double inv_gamma = 1.0 / p.gamma;
-    const double shock = shock_weight(i.entropy, j.entropy, i.rho * i.c * i.c * inv_gamma, j.rho * j.c * j.c * inv_gamma,
-                                      0.5 * (i.rho + j.rho), vr_visc, r2);
+    const ShockFraction shock = shock_fraction(i.entropy, j.entropy, i.rho * i.c * i.c * inv_gamma,
+                                               j.rho * j.c * j.c * inv_gamma, 0.5 * (i.rho + j.rho), vr_visc, r2);
     vr_visc = reconstructed_approach(vr_visc, stretch(i.strain, dx.x, dx.y, dx.z), stretch(j.strain, dx.x, dx.y, dx.z),
                                      shock);
   }
@@ -491,8 +495,8 @@ template <bool kSignalVelocity, bool kComoving = false, bool kReconstruct = fals
       const double x = qdx[l], y = qdy[l], z = qdz[l];
       const StrainRate sj{{q.sxx[b + l], q.syy[b + l], q.szz[b + l]}, {q.sxy[b + l], q.sxz[b + l], q.syz[b + l]}};
       const double hubble = kComoving ? hubble_flow * r2 : 0.0;
-      const double shock = shock_weight(i.entropy, q.entropy[b + l], i.rho * i.c * i.c * inv_gamma,
-                                        qrho[l] * qc[l] * qc[l] * inv_gamma, 0.5 * (i.rho + qrho[l]), vr, r2);
+      const ShockFraction shock = shock_fraction(i.entropy, q.entropy[b + l], i.rho * i.c * i.c * inv_gamma,
+                                                 qrho[l] * qc[l] * qc[l] * inv_gamma, 0.5 * (i.rho + qrho[l]), vr, r2);
       vr_visc = reconstructed_approach(vr, stretch(i.strain, x, y, z) + hubble, stretch(sj, x, y, z) + hubble, shock);
     }
     const double mu = vr_visc < 0.0 ? h_ij * vr_visc / (r2 + 0.01 * h_ij * h_ij) : 0.0;
