@@ -55,7 +55,7 @@ void density(StepContext& ctx, int ci) {
     if (!ctx.is_active(i)) continue;
     gas.rho[i] = gas.wcount[i] = gas.wcount_dh[i] = gas.div_v[i] = 0.0;
     gas.curl_v[i] = {};
-    gas.strain_diagonal[i] = gas.strain_shear[i] = {};
+    if (ctx.hydro.viscosity_reconstruction) gas.strain_diagonal[i] = gas.strain_shear[i] = {};
   }
   thread_local NeighbourBlock block;
   if (load_neighbourhood(ctx, ci, false, block)) density_sums(ctx, c, block);
