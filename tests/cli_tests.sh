@@ -479,6 +479,48 @@ EOT
       head -1 restart.txt
       "$python" "$root/tests/compare_snapshots.py" outA/snapshot_0002.hdf5 outB/snapshot_0002.hdf5
     fi ;;
+  reference_tables)
+    # `fountain reference`: the background table against Einstein-de Sitter's closed forms
+    # and the published LCDM values (COSMOLOGY.md C2), the Ewald tables against the published
+    # correction field and convergence; bad ranges and unwritable files are named.
+    "$bin" reference background --omega-m 1 --omega-lambda 0 --a-begin 0.01 --points 50 -o eds.txt > log.txt 2>&1 ||
+      { cat log.txt; fail "reference background (EdS)"; }
+    "$bin" reference background --a-begin 0.02 --points 30 -o lcdm.txt > log.txt 2>&1 ||
+      { cat log.txt; fail "reference background (LCDM)"; }
+    "$bin" reference ewald --points 200 --line-points 11 -o ewald > log.txt 2>&1 || { cat log.txt; fail "reference ewald"; }
+    cat log.txt
+    "$python" - <<'EOT' || fail "the reference tables are wrong"
+import numpy as np, sys
+t = np.loadtxt('eds.txt')
+a, H0 = t[:, 0], 100.0
+exact = [1 / a - 1, a**-1.5, 2 / (3 * H0) * a**1.5, a, np.ones_like(a), -3 / 7 * a**2, 2 * np.ones_like(a),
+         2 / H0 * (10 - a**-0.5), 2 / H0 * (a**0.5 - 0.1), 2 / H0 * (10 - a**-0.5), 2 / (3 * H0) * (a**1.5 - 1e-3)]
+worst = max(np.abs(t[:, c + 1] - e).max() / np.abs(e).max() for c, e in enumerate(exact))
+l = np.loadtxt('lcdm.txt')[-1]
+# a = 1: H0 t0, D, f, D2 / (-3/7 D^2), f2, and the factors from a = 0.02 (C2.1-C2.3).
+got = [H0 * l[3], l[4], l[5], l[6] / (-3 / 7 * l[4] ** 2), l[7], l[8], l[9], l[11]]
+want = [0.9640994, 0.7789810168, 0.5127962477, 1.00863056, 1.04044783, 0.2163879, 0.02788679, 9.606567e-3]
+lcdm = max(abs(g / w - 1) for g, w in zip(got, want))
+p = np.loadtxt('ewald/published.txt')
+ew = max(abs(p[0, 6] - 2.8372975), np.abs(p[1, 3:6] - [1.2464596, 0, 0]).max(),
+         np.abs(p[2, 3:6] - [0.2128998, 0.5644484, 1.2980756]).max(), np.abs(p[5, 3:6] - 0.7698004).max())
+c = np.loadtxt('ewald/convergence.txt')
+row = lambda n, h2, alpha=2.0: c[(c[:, 0] == n) & (c[:, 1] == h2) & (c[:, 2] == alpha)][0, 3]
+conv = [row(2, 4), row(3, 8), row(4, 10), row(8, 64, 1.5)]
+print(f"EdS table within {worst:.1e} of the closed forms, LCDM within {lcdm:.1e} of the published values, "
+      f"Ewald within {ew:.1e}; cuts (2, 4), (3, 8), (4, 10), alpha 1.5: {conv}")
+ok = worst < 1e-10 and lcdm < 2e-7 and ew < 1e-7
+ok = ok and 1e-5 < conv[0] < 1e-4 and 1e-10 < conv[1] < 1e-8 and 1e-12 < conv[2] < 1e-10 and conv[3] < 1e-13
+sys.exit(0 if ok else 1)
+EOT
+    set +e
+    "$bin" reference background --a-begin 0.5 --a-end 0.1 -o x.txt > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "a-begin" bad.txt || { cat bad.txt; fail "a reversed range was not refused"; }
+    set +e
+    "$bin" reference background -o nothere/x.txt > bad.txt 2>&1; status=$?
+    set -e
+    [ "$status" -eq 2 ] && grep -q "nothere/x.txt" bad.txt || { cat bad.txt; fail "an unwritable table was not named"; } ;;
   fof_catalogue)
     # `fountain fof` on a dark matter snapshot written to GADGET's layout: two Plummer clumps
     # (one across the box's corner) in a uniform background. Two groups, the larger first, the

@@ -3,9 +3,7 @@
 
 #include <fmt/format.h>
 
-#include <cstdio>
-#include <memory>
-
+#include "app/TextFile.hpp"
 #include "core/Error.hpp"
 #include "cosmology/Background.hpp"
 #include "cosmology/PowerSpectrum.hpp"
@@ -41,8 +39,6 @@ std::string write_mass_function(const MassFunctionRequest& request) {
   const double box = halos.box * to_mpc_h;
   const auto bins = groups::bin_mass_function(masses, box * box * box, model, request.log_min, request.log_max, request.width);
 
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> out(std::fopen(request.output.c_str(), "w"), &std::fclose);
-  if (!out) throw InputError(fmt::format("{}: cannot be written", request.output));
   std::string text = fmt::format(
       "# halo mass function of {} (box {} Mpc/h, a = {}, Omega_m {}, Omega_b {}, h {}, sigma_8 {}, n_s {}, {} "
       "transfer)\n# expected counts: the box volume times dn/dln M integrated over each bin; Jenkins et al. (2001) "
@@ -54,8 +50,7 @@ std::string write_mass_function(const MassFunctionRequest& request) {
     text += fmt::format("{:.4f} {:.4f} {} {:.6g} {:.6g}\n", b.log_lo, b.log_hi, b.count, b.jenkins, b.sheth_tormen);
     counted += b.count;
   }
-  if (std::fputs(text.c_str(), out.get()) < 0 || std::fflush(out.get()) != 0)
-    throw InputError(fmt::format("{}: writing failed (disk full?)", request.output));
+  write_text_file(request.output, text);
   return fmt::format("wrote {} ({} of {} groups in {} bins from 10^{} to 10^{} Msun/h)", request.output, counted,
                      masses.size(), bins.size(), request.log_min, request.log_max);
 }

@@ -12,6 +12,7 @@
 #include "app/GroupCommand.hpp"
 #include "app/IcCommand.hpp"
 #include "app/MassFunctionCommand.hpp"
+#include "app/ReferenceCommand.hpp"
 #include "app/Simulation.hpp"
 #include "cosmology/TransferFunction.hpp"
 #include "core/Error.hpp"
@@ -21,7 +22,7 @@
 
 namespace {
 
-constexpr const char* kCommands[] = {"run", "ic", "fof", "hop", "mass-function", "params"};
+constexpr const char* kCommands[] = {"run", "ic", "fof", "hop", "mass-function", "reference", "params"};
 
 // CLI11 answers an unknown first word with "A subcommand is required": name it instead.
 bool is_unknown_command(int argc, char** argv) {
@@ -182,6 +183,29 @@ int main(int argc, char** argv) {
           ->check(CLI::PositiveNumber)
           ->capture_default_str()};
 
+  auto* reference = app.add_subcommand("reference", "Tables of the exact solutions the validation compares with");
+  reference->require_subcommand(1);
+  auto* background_cmd = reference->add_subcommand(
+      "background", "E(a), cosmic time, growth to second order and the leapfrog's integration factors against a");
+  BackgroundTableRequest bg_request;
+  background_cmd->add_option("-o,--output", bg_request.output, "Table to write")->required();
+  background_cmd->add_option("--omega-m", bg_request.omega_m, "Omega_m")->capture_default_str();
+  background_cmd->add_option("--omega-lambda", bg_request.omega_lambda, "Omega_Lambda (Omega_k is what makes one)")
+      ->capture_default_str();
+  background_cmd->add_option("--a-begin", bg_request.a_begin, "First scale factor; the factors integrate from it")
+      ->capture_default_str();
+  background_cmd->add_option("--a-end", bg_request.a_end, "Last scale factor")->capture_default_str();
+  background_cmd->add_option("--points", bg_request.points, "Rows, equally spaced in ln a")->capture_default_str();
+  auto* ewald_cmd = reference->add_subcommand(
+      "ewald", "The periodic correction field of a unit mass along lines and at the published points, and the "
+               "sums' convergence with their cuts");
+  EwaldTableRequest ewald_request;
+  ewald_cmd->add_option("-o,--output-dir", ewald_request.output_dir, "Folder for lines.txt, published.txt and convergence.txt")
+      ->required();
+  ewald_cmd->add_option("--points", ewald_request.points, "Random points of the convergence table")->capture_default_str();
+  ewald_cmd->add_option("--line-points", ewald_request.line_points, "Samples along each line")->capture_default_str();
+  ewald_cmd->add_option("--seed", ewald_request.seed, "Seed of the random points")->capture_default_str();
+
   auto* params_cmd = app.add_subcommand("params", "Print the parameter reference (Markdown)");
 
   if (is_unknown_command(argc, argv)) {
@@ -300,6 +324,10 @@ int main(int argc, char** argv) {
       fmt::print(stderr, "{}\n", find_hop_groups(hop_request));
     } else if (*mass_function) {
       fmt::print(stderr, "{}\n", write_mass_function(mf_request));
+    } else if (*background_cmd) {
+      fmt::print(stderr, "{}\n", write_background_table(bg_request));
+    } else if (*ewald_cmd) {
+      fmt::print(stderr, "{}\n", write_ewald_tables(ewald_request));
     } else if (*params_cmd) {
       fmt::print("{}", parameter_reference_markdown());
     }

@@ -1,0 +1,137 @@
+// The reference tables behind the validation's background and Ewald figures (docs/validation.md).
+#include "app/ReferenceCommand.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <vector>
+
+#include "app/TextFile.hpp"
+#include "core/Error.hpp"
+#include "cosmology/Background.hpp"
+#include "cosmology/IntegrationFactors.hpp"
+#include "gravity/EwaldSummation.hpp"
+
+namespace fountain {
+
+std::string write_background_table(const BackgroundTableRequest& r) {
+  if (!(r.omega_m > 0.0) || !std::isfinite(r.omega_lambda))
+    throw InputError(fmt::format("--omega-m ({}) must be positive and --omega-lambda ({}) finite", r.omega_m,
+                                 r.omega_lambda));
+  if (!(r.a_begin > 0.0) || !(r.a_end > r.a_begin) || !std::isfinite(r.a_end))
+    throw InputError(fmt::format("--a-begin ({}) and --a-end ({}) must satisfy 0 < a_begin < a_end", r.a_begin, r.a_end));
+  if (r.points < 2) throw InputError(fmt::format("--points ({}) must be at least 2", r.points));
+  cosmology::CosmologyParams c;
+  c.omega_m = r.omega_m;
+  c.omega_lambda = r.omega_lambda;
+  const cosmology::Background background(c);
+  for (const double a : {r.a_begin, r.a_end})
+    if (!(c.omega_m / (a * a * a) + c.omega_k() / (a * a) + c.omega_lambda > 0.0))
+      throw InputError(fmt::format("Omega_m {} with Omega_Lambda {} has no expanding solution at a = {}", r.omega_m,
+                                   r.omega_lambda, a));
+  using Factors = cosmology::IntegrationFactors;
+  const Factors factors(background, 5.0 / 3.0, r.a_begin, r.a_end);
+  std::string text = fmt::format(
+      "# background of Omega_m {}, Omega_Lambda {} (Omega_k {}), internal units: H0 = {}, time in (Mpc/h)/(km/s)\n"
+      "# drift, gravity_kick, hydro_kick (gamma 5/3) and time factors integrate from a = {}\n"
+      "# a z E t D f D2 f2 drift gravity_kick hydro_kick time\n",
+      r.omega_m, r.omega_lambda, c.omega_k(), background.hubble0(), r.a_begin);
+  const double ln_begin = std::log(r.a_begin), ln_step = (std::log(r.a_end) - ln_begin) / (r.points - 1);
+  for (int i = 0; i < r.points; ++i) {
+    const double a = i == r.points - 1 ? r.a_end : std::exp(ln_begin + i * ln_step);
+    const cosmology::SecondOrderGrowth g2 = background.second_order_growth(a);
+    text += fmt::format("{:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n", a,
+                        1.0 / a - 1.0, background.E(a), background.cosmic_time(a), background.growth(a),
+                        background.growth_rate(a), g2.d2, g2.f2, factors.cumulative(Factors::drift, a),
+                        factors.cumulative(Factors::gravity_kick, a), factors.cumulative(Factors::hydro_kick, a),
+                        factors.cumulative(Factors::time, a));
+  }
+  write_text_file(r.output, text);
+  return fmt::format("wrote {} ({} rows, a = {} to {})", r.output, r.points, r.a_begin, r.a_end);
+}
+
+namespace {
+
+// Sums cut at the image cube |n_d| <= images for any point with components in (-1/2, 1/2):
+// the real-space reach is a per-component bound (EwaldSummation.hpp).
+gravity::EwaldSettings cut(int images, int fourier_h2, double alpha) {
+  gravity::EwaldSettings s;
+  s.alpha = alpha;
+  s.real_reach = images + 0.5;
+  s.fourier_h2 = fourier_h2;
+  return s;
+}
+
+std::string field_row(const Vec3& x, const gravity::EwaldField& f) {
+  return fmt::format("{:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g} {:.17g}\n", x.x, x.y, x.z, f.acceleration.x,
+                     f.acceleration.y, f.acceleration.z, f.potential);
+}
+
+}  // namespace
+
+std::string write_ewald_tables(const EwaldTableRequest& r) {
+  if (r.points < 1 || r.line_points < 2)
+    throw InputError(fmt::format("--points ({}) must be positive and --line-points ({}) at least 2", r.points,
+                                 r.line_points));
+  std::error_code ec;
+  std::filesystem::create_directories(r.output_dir, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot be created ({})", r.output_dir, ec.message()));
+  const std::filesystem::path dir(r.output_dir);
+
+  // Along the x axis, the diagonal and a line through a published point, x from 0 to 1/2.
+  std::string lines = "# correction field a_c = a + x/|x|^3 and potential phi + 1/|x| of a unit mass in a unit box "
+                      "(G = 1), default sums\n# line x y z acx acy acz phi_c  (lines: 0 (s,0,0), 1 (s,s,s), 2 (s,0.3,0.2))\n";
+  for (int line = 0; line < 3; ++line)
+    for (int i = 0; i < r.line_points; ++i) {
+      const double s = 0.5 * i / (r.line_points - 1);
+      const Vec3 x = line == 0 ? Vec3{s, 0.0, 0.0} : line == 1 ? Vec3{s, s, s} : Vec3{s, 0.3, 0.2};
+      lines += fmt::format("{} ", line) + field_row(x, gravity::ewald_correction(x, 1.0));
+    }
+  write_text_file((dir / "lines.txt").string(), lines);
+
+  std::string published = "# the correction field at the published reference points, default sums\n# x y z acx acy acz phi_c\n";
+  for (const Vec3& x : {Vec3{0.0, 0.0, 0.0}, Vec3{0.25, 0.0, 0.0}, Vec3{0.1, 0.2, 0.3}, Vec3{0.4, 0.3, 0.2},
+                        Vec3{0.5, 0.0, 0.0}, Vec3{0.5, 0.5, 0.5}})
+    published += field_row(x, gravity::ewald_correction(x, 1.0));
+  write_text_file((dir / "published.txt").string(), published);
+
+  // Random points in the box around the mass; 53-bit doubles from the engine's raw output,
+  // so the points are the same with any standard library.
+  std::mt19937_64 engine(r.seed);
+  std::vector<Vec3> points(static_cast<std::size_t>(r.points));
+  for (Vec3& p : points)
+    for (int d = 0; d < 3; ++d) p[d] = static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5;
+  auto field_at = [&](const gravity::EwaldSettings& s) {
+    std::vector<Vec3> out;
+    out.reserve(points.size());
+    for (const Vec3& p : points) out.push_back(gravity::ewald_correction(p, 1.0, s).acceleration);
+    return out;
+  };
+  const int wide_images = 8, wide_h2 = 64;
+  const std::vector<Vec3> reference = field_at(cut(wide_images, wide_h2, 2.0));
+  std::string convergence = fmt::format(
+      "# largest |a - a_reference| over {} random points (G m / L^2); reference: images |n_d| <= {}, h^2 <= {}, "
+      "alpha 2/L\n# images fourier_h2 alpha max_error\n",
+      r.points, wide_images, wide_h2);
+  struct Cut {
+    int images, h2;
+    double alpha;
+  };
+  std::vector<Cut> cuts;
+  for (int n = 0; n <= 6; ++n) cuts.push_back({n, wide_h2, 2.0});
+  for (int h2 : {1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 14, 16}) cuts.push_back({wide_images, h2, 2.0});
+  for (const Cut& c : {Cut{2, 4, 2.0}, Cut{3, 8, 2.0}, Cut{4, 10, 2.0}, Cut{wide_images, wide_h2, 1.5}}) cuts.push_back(c);
+  for (const Cut& c : cuts) {
+    const std::vector<Vec3> f = field_at(cut(c.images, c.h2, c.alpha));
+    double worst = 0.0;
+    for (std::size_t i = 0; i < f.size(); ++i) worst = std::max(worst, norm(f[i] - reference[i]));
+    convergence += fmt::format("{} {} {} {:.6e}\n", c.images, c.h2, c.alpha, worst);
+  }
+  write_text_file((dir / "convergence.txt").string(), convergence);
+  return fmt::format("wrote lines.txt, published.txt and convergence.txt in {}", r.output_dir);
+}
+
+}  // namespace fountain
