@@ -55,8 +55,10 @@ std::string write_background_table(const BackgroundTableRequest& r) {
 
 namespace {
 
-// Sums cut at the image cube |n_d| <= images for any point with components in (-1/2, 1/2):
-// the real-space reach is a per-component bound (EwaldSummation.hpp).
+// For a point with components in (-1/2, 1/2), a reach of N + 1/2 keeps the images n with
+// |n_d| <= N and |x - n| <= N + 1/2 (the sum bounds each component, then the distance): the
+// image cube of published convergence tables, less far corners whose terms are below 1e-10
+// for N >= 2.
 gravity::EwaldSettings cut(int images, int fourier_h2, double alpha) {
   gravity::EwaldSettings s;
   s.alpha = alpha;
