@@ -42,7 +42,8 @@ TEST(ComovingProblems, ConstantCosmologicalVolume) {
     const double u_begin = energy_of_temperature(1e4, 1.22) * a_begin * a_begin;  // u' = a^2 u
     const int n = 16;
     GasParticles g = lattice_gas(n, box, omega_m, u_begin);
-    RunConfig cfg = comoving_config(box, omega_m, omega_lambda, a_begin, 1.0, 32);
+    // One mesh cell per particle spacing, as COSMOLOGY.md C10.2 sets it at 32^3.
+    RunConfig cfg = comoving_config(box, omega_m, omega_lambda, a_begin, 1.0, n);
     cfg.gravity.softening_gas = 0.05 * box / n;
     Engine engine(cfg, g);
     engine.initialise();
@@ -69,10 +70,13 @@ TEST(ComovingProblems, ConstantCosmologicalVolume) {
     std::printf("%s, a = 1/64 -> 1 in %lld steps: |u'/u'_0 - 1| <= %.2e, |rho'/rho'_0 - 1| <= %.2e, "
                 "|rho'/rhobar' - 1| <= %.2e, displacement <= %.2e spacings\n",
                 lcdm ? "LCDM" : "EdS", steps, du, drho, drho_mean, dx);
-    EXPECT_LE(du, 1e-3);
-    EXPECT_LE(drho, 1e-3);
+    // Required: 1e-3 each. Round-off and the integrator alone move a lattice by ~1e-6; one step
+    // of cruder forces on a group (the Barnes-Hut fallback of a walk, for instance) shows as
+    // several 1e-5, so the changes are held to 1e-5.
+    EXPECT_LE(du, 1e-5);
+    EXPECT_LE(drho, 1e-5);
     EXPECT_LE(drho_mean, 1e-2);  // the SPH estimate of a lattice's density, not a change
-    EXPECT_LE(dx, 1e-3);
+    EXPECT_LE(dx, 1e-5);
   }
 }
 

@@ -731,7 +731,9 @@ void Engine::initialise() {
     // The relative opening criterion needs a previous acceleration: a first pass with the
     // Barnes-Hut criterion gives it (as in GADGET-2).
     activate(Phase::Hydro);
+    ctx_->first_forces = true;
     run_graph(nullptr);
+    ctx_->first_forces = false;
   }
   activate(Phase::Full);
   run_graph(nullptr);

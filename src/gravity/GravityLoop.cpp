@@ -27,9 +27,8 @@ WalkConfig walk_config(const StepContext& ctx) {
   return config;
 }
 
-double old_acceleration(const Vec3& a) {
-  const double a2 = dot(a, a);
-  return a2 > 0.0 ? std::sqrt(a2) : kNoOldAcceleration;
+double old_acceleration(const StepContext& ctx, const Vec3& a) {
+  return ctx.first_forces ? kNoOldAcceleration : norm(a);
 }
 
 // Leaf c's active particles of both species, as the walk takes them (walked together, in
@@ -47,12 +46,12 @@ void leaf_targets(const StepContext& ctx, int c, LeafTargets& out) {
   out.dm.clear();
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) {
     if (!ctx.is_active(i)) continue;
-    out.targets.push_back({gas.x[i], ctx.softening_gas(), old_acceleration(gas.a_grav[i]), static_cast<std::int64_t>(i)});
+    out.targets.push_back({gas.x[i], ctx.softening_gas(), old_acceleration(ctx, gas.a_grav[i]), static_cast<std::int64_t>(i)});
     out.gas.push_back(i);
   }
   for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
     if (!ctx.is_active_dm(i)) continue;
-    out.targets.push_back({dm.x[i], ctx.softening_of(i), old_acceleration(dm.a_grav[i]),
+    out.targets.push_back({dm.x[i], ctx.softening_of(i), old_acceleration(ctx, dm.a_grav[i]),
                            static_cast<std::int64_t>(gas.size() + i)});
     out.dm.push_back(i);
   }

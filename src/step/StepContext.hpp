@@ -53,6 +53,11 @@ struct StepContext {
   // Set when the tree was built at the particles' present positions (at a rebuild, before the
   // step's graph): the step's tree tasks then have nothing to do.
   bool tree_current = false;
+  // Set for the engine's first force pass only, which has no previous accelerations: the walk
+  // then opens nodes by the Barnes-Hut angle. Every later pass scales the relative criterion by
+  // each particle's |a_old|, even an exact 0 (a lattice point whose pair forces cancel, which
+  // then opens every node), rather than falling back to the cruder angle for its group.
+  bool first_forces = false;
   // Across ranks (each rank walking its own leaves): the tree's part this rank builds and
   // refits, and the messages that assemble each step's tree from it (docs/gravity.md, "Across
   // ranks"); null when the tree is built whole from every particle.
