@@ -79,6 +79,10 @@ def main(folder, out):
     if len(alpha):
         ax.axhline(alpha[0, 3], color="0.5", ls=":", lw=0.8)
         ax.text(0.1, alpha[0, 3] * 2, f"alpha 1.5/L against 2/L: {alpha[0, 3]:.1e}", fontsize=7)
+    default = cuts[cuts[:, 0] == -1]
+    if len(default):
+        ax.text(0.1, 1e-17 if default[0, 3] < 1e-17 else default[0, 3] * 2,
+                f"Fountain's default sums (reach 2.9 L, H = 36): {default[0, 3]:.1e}", fontsize=7)
     ax.set_xlabel("N  or  sqrt(H)")
     ax.set_ylabel("largest |a - a_reference| [G m / L^2]")
     ax.set_ylim(floor / 2, 10)
