@@ -136,7 +136,7 @@ sys.exit(0 if len(times) == 5 and all(a < b for a, b in zip(times, times[1:])) e
     refused "params.yml:3: key 'run.threads' = 10000 is out of range \[0, 4096\]" "$bin" run params.yml
     params good.hdf5 out 0.001
     refused "option --abandon-after-steps = 0 must be a positive step count" "$bin" run params.yml --abandon-after-steps 0
-    refused "unknown command 'frobnicate': expected one of run, ic, fof, hop, mass-function, params" "$bin" frobnicate
+    refused "unknown command 'frobnicate': expected one of run, ic, fof, hop, mass-function, reference, params" "$bin" frobnicate
     sed -i 's|file: good.hdf5|file: ""|' params.yml
     refused "params.yml:[0-9]*: key 'initial_conditions.file' is empty" "$bin" run params.yml
     params good.hdf5 out 0.001 "cooling:
