@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
 #include <utility>
 #include <vector>
 
+#include "core/Error.hpp"
 #include "cosmology/Background.hpp"
 #include "cosmology/IntegrationFactors.hpp"
 #include "step/TimeLine.hpp"
@@ -89,6 +91,25 @@ TEST(CosmologyBackground, CurvedSelfConsistent) {
   const IntegrationFactors k(b, 5.0 / 3.0, 0.05, 1.0);
   expect_rel(k.factor(IntegrationFactors::time, 0.05, 1.0), b.cosmic_time(1.0) - b.cosmic_time(0.05), 1e-10,
              "K_t against t(a)");
+}
+
+// A closed universe stops expanding where a^3 E^2 = Omega_m + Omega_k a + Omega_Lambda a^3
+// first reaches zero: before a = 1 the background is refused; after it, a run past the limit.
+TEST(CosmologyBackground, ExpansionLimit) {
+  EXPECT_TRUE(std::isinf(Background(eds()).expansion_limit()));
+  EXPECT_TRUE(std::isinf(Background({0.3, 0.7, 0.04, 0.7}).expansion_limit()));
+  EXPECT_TRUE(std::isinf(Background({0.3, 0.5, 0.04, 0.7}).expansion_limit()));  // open
+  EXPECT_TRUE(std::isinf(Background({2.5, 0.1, 0.04, 0.7}).expansion_limit()));   // closed, saved by Lambda
+  EXPECT_NEAR(Background({3.0, 0.0, 0.04, 0.7}).expansion_limit(), 1.5, 1e-15);  // Omega_m / (Omega_m - 1)
+  const Background closed({3.0, 0.1, 0.04, 0.7});
+  const double limit = closed.expansion_limit();
+  EXPECT_GT(limit, 1.0);
+  EXPECT_LT(limit, 2.0);
+  EXPECT_NEAR(3.0 - 2.1 * limit + 0.1 * limit * limit * limit, 0.0, 1e-13);
+  EXPECT_NO_THROW(IntegrationFactors(closed, 5.0 / 3.0, 0.01, 0.99 * limit));
+  EXPECT_THROW(IntegrationFactors(closed, 5.0 / 3.0, 0.01, 2.0), InputError);
+  EXPECT_THROW(Background({0.3, 5.0, 0.04, 0.7}), InputError);  // would have bounced before a = 1
+  EXPECT_THROW(Background({std::numeric_limits<double>::infinity(), 0.7, 0.04, 0.7}), InputError);
 }
 
 TEST(CosmologyFactors, EinsteinDeSitterClosedForms) {

@@ -6,6 +6,7 @@
 #include <boost/math/quadrature/gauss_kronrod.hpp>
 #include <boost/numeric/odeint.hpp>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "core/Error.hpp"
@@ -23,9 +24,31 @@ double integrate(F&& f, double lo, double hi) {
 }  // namespace
 
 Background::Background(const CosmologyParams& p, double hubble0) : p_(p), h0_(hubble0) {
-  if (!(p.omega_m > 0.0) || !(p.omega_lambda >= 0.0) || !(hubble0 > 0.0))
+  if (!(p.omega_m > 0.0) || !(p.omega_lambda >= 0.0) || !std::isfinite(p.omega_m) || !std::isfinite(p.omega_lambda) ||
+      !(hubble0 > 0.0))
     throw InputError(fmt::format("cosmology: omega_m = {} must be positive and omega_lambda = {} not negative",
                                  p.omega_m, p.omega_lambda));
+  if (const double limit = expansion_limit(); !(limit > 1.0))
+    throw InputError(fmt::format("cosmology: omega_m = {} with omega_lambda = {} (Omega_k = {}) stops expanding at "
+                                 "a = {:.6g}, before today (a = 1)",
+                                 p.omega_m, p.omega_lambda, p.omega_k(), limit));
+}
+
+double Background::expansion_limit() const {
+  // a^3 E^2 = Omega_m + Omega_k a + Omega_Lambda a^3 is positive at a = 0; with Omega_Lambda
+  // >= 0 it can only reach zero while falling, i.e. with Omega_k < 0, before its minimum.
+  const double om = p_.omega_m, ok = p_.omega_k(), ol = p_.omega_lambda;
+  if (ok >= 0.0) return std::numeric_limits<double>::infinity();
+  if (ol == 0.0) return om / -ok;
+  const double a_min = std::sqrt(-ok / (3.0 * ol));
+  auto f = [&](double a) { return om + ok * a + ol * a * a * a; };
+  if (f(a_min) > 0.0) return std::numeric_limits<double>::infinity();
+  double lo = 0.0, hi = a_min;  // f(lo) > 0 >= f(hi)
+  for (int i = 0; i < 200 && hi - lo > 1e-15 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (f(mid) > 0.0 ? lo : hi) = mid;
+  }
+  return hi;
 }
 
 double Background::E(double a) const {

@@ -37,6 +37,11 @@ class Background {
   explicit Background(const CosmologyParams& p, double hubble0 = kHubbleInternal);
 
   const CosmologyParams& params() const { return p_; }
+  // The first scale factor at which E(a)^2 reaches zero (a closed universe turning around, or
+  // one whose Lambda would have made it bounce), infinity if it expands for ever: the
+  // background has no solution from the Big Bang beyond it. The constructor requires it
+  // beyond a = 1, where growth and spectra are normalised.
+  double expansion_limit() const;
   double hubble0() const { return h0_; }
   double E(double a) const;                // H(a) / H0
   double hubble(double a) const { return h0_ * E(a); }

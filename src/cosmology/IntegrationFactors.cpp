@@ -16,6 +16,10 @@ IntegrationFactors::IntegrationFactors(const Background& background, double gamm
   if (!(a_begin > 0.0 && a_end > a_begin) || intervals < 1)
     throw InputError(fmt::format("cosmology: the run must go from a_begin = {} > 0 to a larger a_end = {}", a_begin,
                                  a_end));
+  if (const double limit = background.expansion_limit(); !(a_end < limit))
+    throw InputError(fmt::format("cosmology: omega_m = {} with omega_lambda = {} stops expanding at a = {:.6g}, "
+                                 "before a_end = {}",
+                                 background.params().omega_m, background.params().omega_lambda, limit, a_end));
   ln_begin_ = std::log(a_begin);
   step_ = (std::log(a_end) - ln_begin_) / intervals;
   for (int k = 0; k < 4; ++k) {
