@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "app/TextFile.hpp"
@@ -18,9 +19,6 @@
 namespace fountain {
 
 std::string write_background_table(const BackgroundTableRequest& r) {
-  if (!(r.omega_m > 0.0) || !std::isfinite(r.omega_lambda))
-    throw InputError(fmt::format("--omega-m ({}) must be positive and --omega-lambda ({}) finite", r.omega_m,
-                                 r.omega_lambda));
   // Beyond these a^-3 and a^3 leave double's range in E(a)^2 (and radiation, omitted, would
   // rule long before the lower one).
   if (!(r.a_begin >= 1e-8) || !(r.a_end > r.a_begin) || !(r.a_end <= 1e4))
@@ -106,36 +104,33 @@ std::string write_ewald_tables(const EwaldTableRequest& r) {
   std::vector<Vec3> points(static_cast<std::size_t>(r.points));
   for (Vec3& p : points)
     for (int d = 0; d < 3; ++d) p[d] = static_cast<double>(engine() >> 11) * 0x1.0p-53 - 0.5;
-  auto field_at = [&](const gravity::EwaldSettings& s) {
-    std::vector<Vec3> out;
-    out.reserve(points.size());
-    for (const Vec3& p : points) out.push_back(gravity::ewald_correction(p, 1.0, s).acceleration);
-    return out;
-  };
   const int wide_images = 8, wide_h2 = 64;
-  const std::vector<Vec3> reference = field_at(cut(wide_images, wide_h2, 2.0));
+  std::vector<Vec3> reference;
+  reference.reserve(points.size());
+  for (const Vec3& p : points) reference.push_back(gravity::ewald_correction(p, 1.0, cut(wide_images, wide_h2, 2.0)).acceleration);
+  auto largest_difference = [&](const gravity::EwaldSettings& s) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < points.size(); ++i)
+      worst = std::max(worst, norm(gravity::ewald_correction(points[i], 1.0, s).acceleration - reference[i]));
+    return worst;
+  };
+  struct Row {
+    int images;  // -1: Fountain's default sums, cut by distance alone
+    gravity::EwaldSettings settings;
+  };
+  std::vector<Row> rows;
+  for (int n = 0; n <= 6; ++n) rows.push_back({n, cut(n, wide_h2, 2.0)});
+  for (int h2 : {1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 14, 16}) rows.push_back({wide_images, cut(wide_images, h2, 2.0)});
+  for (const auto& [n, h2] : {std::pair{2, 4}, std::pair{3, 8}, std::pair{4, 10}}) rows.push_back({n, cut(n, h2, 2.0)});
+  rows.push_back({wide_images, cut(wide_images, wide_h2, 1.5)});
+  rows.push_back({-1, gravity::EwaldSettings{}});
   std::string convergence = fmt::format(
       "# largest |a - a_reference| over {} random points (G m / L^2); reference: images |n_d| <= {}, h^2 <= {}, "
       "alpha 2/L\n# images fourier_h2 alpha max_error  (images -1: Fountain's default sums, reach 2.9 L)\n",
       r.points, wide_images, wide_h2);
-  struct Cut {
-    int images, h2;
-    double alpha;
-  };
-  std::vector<Cut> cuts;
-  for (int n = 0; n <= 6; ++n) cuts.push_back({n, wide_h2, 2.0});
-  for (int h2 : {1, 2, 3, 4, 5, 6, 8, 9, 10, 11, 12, 14, 16}) cuts.push_back({wide_images, h2, 2.0});
-  for (const Cut& c : {Cut{2, 4, 2.0}, Cut{3, 8, 2.0}, Cut{4, 10, 2.0}, Cut{wide_images, wide_h2, 1.5}}) cuts.push_back(c);
-  for (const Cut& c : cuts) {
-    const std::vector<Vec3> f = field_at(cut(c.images, c.h2, c.alpha));
-    double worst = 0.0;
-    for (std::size_t i = 0; i < f.size(); ++i) worst = std::max(worst, norm(f[i] - reference[i]));
-    convergence += fmt::format("{} {} {} {:.6e}\n", c.images, c.h2, c.alpha, worst);
-  }
-  const std::vector<Vec3> defaults = field_at(gravity::EwaldSettings{});
-  double worst = 0.0;
-  for (std::size_t i = 0; i < defaults.size(); ++i) worst = std::max(worst, norm(defaults[i] - reference[i]));
-  convergence += fmt::format("-1 {} {} {:.6e}\n", gravity::EwaldSettings{}.fourier_h2, gravity::EwaldSettings{}.alpha, worst);
+  for (const Row& row : rows)
+    convergence += fmt::format("{} {} {} {:.6e}\n", row.images, row.settings.fourier_h2, row.settings.alpha,
+                               largest_difference(row.settings));
   write_text_file((dir / "convergence.txt").string(), convergence);
   return fmt::format("wrote lines.txt, published.txt and convergence.txt in {}", r.output_dir);
 }
