@@ -5,12 +5,7 @@
 # temperature, which falls as a^-2.
 #   sh examples/constant_volume/run.sh [-t THREADS]   (a few minutes a run on 2 threads)
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
-[ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+. "$(dirname "$0")/../../scripts/example_prelude.sh"
 for model in eds lcdm; do
   if [ $model = eds ]; then om=1; ol=0; else om=0.3; ol=0.7; fi
   [ -f "$model.hdf5" ] || /usr/bin/python3 "$here/make_ics.py" 32 $om $ol "$model.hdf5"

@@ -4,12 +4,7 @@
 # radial velocity and entropy profiles of both, and the energy budget of the small one to t = 3.
 #   sh examples/evrard/run.sh
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
-[ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+. "$(dirname "$0")/../../scripts/example_prelude.sh"
 for n in 8 16; do
   [ -f "evrard_$n.hdf5" ] || "$bin" ic evrard -n "$n" -o "evrard_$n.hdf5"
   t_end=0.8

@@ -7,12 +7,7 @@
 # realisation's own second-order term (Angulo & Pontzen 2016).
 #   sh examples/linear_growth/run.sh [-t THREADS]
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
-[ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+. "$(dirname "$0")/../../scripts/example_prelude.sh"
 for member in seed1 inverted; do
   mkdir -p "$member"
   cd "$member"

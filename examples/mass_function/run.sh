@@ -6,12 +6,7 @@
 # (1999). Resumable: run it again after a kill.
 #   sh examples/mass_function/run.sh [-t THREADS]
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
-[ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+. "$(dirname "$0")/../../scripts/example_prelude.sh"
 [ -f box.hdf5 ] || "$bin" ic cosmo -n 128 --box 100 --z-start 49 --seed 1 --omega-b 0.03 --hubble 0.6 \
   --sigma-8 0.9 --no-gas -o box.hdf5
 cat > params.yml <<EOT

@@ -5,12 +5,7 @@
 # independent quadrature, and Ewald's periodic field against its published values.
 #   sh examples/references/run.sh   (a few seconds)
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
-[ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+. "$(dirname "$0")/../../scripts/example_prelude.sh"
 "$bin" reference background --omega-m 1 --omega-lambda 0 --a-begin 0.01 -o eds.txt
 "$bin" reference background --omega-m 0.3 --omega-lambda 0.7 --a-begin 0.01 -o lcdm.txt
 "$bin" reference ewald -o ewald

@@ -5,12 +5,7 @@
 # reconstructed one; then the particles against the exact solution at z = 4 and z = 1.5.
 #   sh examples/zeldovich_pancake/run.sh [-t THREADS]   (about 2 minutes a run on 2 threads)
 set -eu
-here=$(cd "$(dirname "$0")" && pwd)
-root=$(cd "$here/../.." && pwd)
-bin="$root/build/fountain"
-[ -x "$bin" ] || sh "$root/scripts/build.sh"
-mkdir -p "$here/output"
-cd "$here/output"
+. "$(dirname "$0")/../../scripts/example_prelude.sh"
 [ -f ics.hdf5 ] || /usr/bin/python3 "$here/make_ics.py" 32 ics.hdf5
 for viscosity in paper reconstructed; do
   reconstruction=false
