@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <random>
 #include <utility>
@@ -13,6 +14,7 @@
 #include "gravity/DirectSummation.hpp"
 #include "gravity/EwaldSummation.hpp"
 #include "gravity/GravityTree.hpp"
+#include "gravity/GravityWalkGroup.hpp"
 #include "gravity/PeriodicMesh.hpp"
 
 namespace fountain::gravity {
@@ -237,6 +239,29 @@ TEST(PeriodicTreePM, TreeShortRangeAtTheProductionSplit) {
   EXPECT_LE(clustered.p99, 3e-2);
   const ErrorQuantiles uniform = tree_errors(false);
   std::printf("tree, uniform, r_s = 1.25 cells: median %.2e, 99th %.2e\n", uniform.median, uniform.p99);
+}
+
+// The float short-range factors the walk's loops use, against GravitySplit's double ones over
+// the whole range the walk reaches (0 to the cut-off), relative to each factor.
+TEST(PeriodicTreePM, FloatShortRangeFactorsMatchTheSplit) {
+  const GravitySplit split{1.0};
+  const auto u_cut = static_cast<float>(split.cutoff_radius() / (2.0 * split.r_s));
+  double worst[4] = {};
+  for (int i = 0; i <= 4096; ++i) {
+    const float u = u_cut * static_cast<float>(i) / 4096.0f;
+    const double r = 2.0 * split.r_s * static_cast<double>(u);
+    const ShortRangeFactors f = short_range_factors(u, u_cut);
+    const double got[4] = {f.g0, f.g1, f.g2, f.g3};
+    const double want[4] = {split.potential_factor(r), split.force_factor(r), split.second_derivative_factor(r),
+                            split.third_derivative_factor(r)};
+    for (int n = 0; n < 4; ++n) worst[n] = std::max(worst[n], std::fabs(got[n] / want[n] - 1.0));
+  }
+  std::printf("short-range factors, largest relative errors: %.2e %.2e %.2e %.2e\n", worst[0], worst[1], worst[2],
+              worst[3]);
+  for (int n = 0; n < 4; ++n) EXPECT_LE(worst[n], 1e-6) << "g" << n;
+  // Beyond the cut-off the factors are those at it (the callers drop such pairs).
+  const ShortRangeFactors at = short_range_factors(u_cut, u_cut), beyond = short_range_factors(2.0f * u_cut, u_cut);
+  EXPECT_EQ(at.g1, beyond.g1);
 }
 
 // The tree's short range against the exact one, pair by pair in effect: with a tight opening
