@@ -1,10 +1,15 @@
-// The TreePM walk's per-target selection of particle sources: every path keeps exactly the sources a plain test keeps.
+// The TreePM walk's selections of particle sources (a leaf's for its group, a group's for each target): every path keeps exactly the sources a plain test keeps.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <random>
 #include <vector>
 
+#include "core/Vec3.hpp"
+#include "gravity/LeafScan.hpp"
 #include "gravity/SourceSelection.hpp"
 
 namespace fountain::gravity {
@@ -55,6 +60,72 @@ TEST(SourceSelection, KeepsExactlyTheSourcesWithinTheCutOffInOrderOnEveryPath) {
   }
   EXPECT_GT(kept_total, 50);  // about 6.5% of the sources lie within the cut-off
   RecordProperty("avx512_path", select_within_is_avx512() ? "yes" : "no");
+}
+
+// A leaf's particles against a group's box: each goes to the far list (beyond the box and
+// beyond max(h_max, its spline length)), the near list (within that length, or inside the box),
+// or neither (beyond the cut-off), in tree order, with the image shift added to every offset;
+// the AVX-512 and portable loops agree, whatever the count's remainder of eight.
+TEST(LeafScan, SortsALeafsParticlesAsThePlainTestsDo) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uni(-3.0, 3.0), len(0.0, 0.6);
+  LeafScanBox box;
+  box.centre = {10.0, -2.0, 0.5};
+  box.half = {0.5, 0.25, 0.75};
+  box.shift = {-16.0, 0.0, 16.0};
+  box.h_max = 0.4;
+  box.cutoff2 = 2.5 * 2.5;
+  int far_total = 0, near_total = 0;
+  for (int count : {0, 1, 5, 8, 9, 16, 23, 64}) {
+    std::vector<Vec3> x(static_cast<std::size_t>(count + 3));
+    std::vector<double> h(x.size());
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      // Offsets from the centre once shifted, within +-3: inside, near, far and beyond.
+      x[k] = {box.centre.x - box.shift.x + uni(rng), box.centre.y + uni(rng), box.centre.z - box.shift.z + uni(rng)};
+      h[k] = len(rng);
+    }
+    // On the cut-off itself along x (kept: the test is d2 <= cutoff2), and a particle inside the box (near).
+    if (count > 2) x[4].x = box.centre.x - box.shift.x + 0.5 + 2.5, x[4].y = box.centre.y, x[4].z = box.centre.z - box.shift.z;
+    if (count > 3) x[5] = {box.centre.x - box.shift.x, box.centre.y, box.centre.z - box.shift.z};
+    const std::int32_t first = 3;
+    std::vector<std::int32_t> want_far, want_near;
+    for (std::int32_t k = first; k < first + count; ++k) {
+      const auto u = static_cast<std::size_t>(k);
+      const double gx = std::max(std::fabs((x[u].x - box.centre.x) + box.shift.x) - box.half.x, 0.0);
+      const double gy = std::max(std::fabs((x[u].y - box.centre.y) + box.shift.y) - box.half.y, 0.0);
+      const double gz = std::max(std::fabs((x[u].z - box.centre.z) + box.shift.z) - box.half.z, 0.0);
+      const double d2 = gx * gx + gy * gy + gz * gz;
+      const double hp = std::max(box.h_max, h[u]);
+      if (d2 > box.cutoff2) continue;
+      (d2 > 0.0 && d2 >= hp * hp ? want_far : want_near).push_back(k);
+    }
+    for (int path = 0; path < 2; ++path) {
+      // Lists already holding entries: the scan appends.
+      std::vector<std::int32_t> far(2 + static_cast<std::size_t>(count) + 8, -7), near(1 + static_cast<std::size_t>(count) + 8, -7);
+      std::int32_t n_far = 2, n_near = 1;
+      (path == 0 ? scan_leaf : scan_leaf_portable)(x.data(), h.data(), first, count, box, far.data(), &n_far,
+                                                   near.data(), &n_near);
+      ASSERT_EQ(n_far - 2, static_cast<std::int32_t>(want_far.size())) << count << " path " << path;
+      ASSERT_EQ(n_near - 1, static_cast<std::int32_t>(want_near.size())) << count << " path " << path;
+      EXPECT_EQ(far[0], -7);
+      EXPECT_EQ(near[0], -7);
+      EXPECT_TRUE(std::equal(want_far.begin(), want_far.end(), far.begin() + 2)) << count;
+      EXPECT_TRUE(std::equal(want_near.begin(), want_near.end(), near.begin() + 1)) << count;
+      if (count > 2) {
+        EXPECT_NE(std::find(far.begin() + 2, far.begin() + n_far, 4), far.begin() + n_far) << "on the cut-off";
+      }
+      if (count > 3) {
+        EXPECT_NE(std::find(near.begin() + 1, near.begin() + n_near, 5), near.begin() + n_near) << "inside";
+      }
+    }
+    far_total += static_cast<int>(want_far.size());
+    near_total += static_cast<int>(want_near.size());
+  }
+  // Every class was met.
+  EXPECT_GT(far_total, 20);
+  EXPECT_GT(near_total, 5);
+  std::printf("leaf scan: %d far, %d near; AVX-512 path %s\n", far_total, near_total,
+              select_within_is_avx512() ? "taken" : "not available here");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "core/VectorClones.hpp"
 #include "gravity/GravityTree.hpp"
 #include "gravity/GravityWalkGroup.hpp"
+#include "gravity/LeafScan.hpp"
 
 namespace fountain::gravity {
 
@@ -44,27 +45,47 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   list.clear();
   const WalkRules rules = walk_rules(config, nodes_[0]);
   const double cutoff = rules.cutoff, slack = rules.slack;
-  // Each of a node's particles, tested alone: written to both lists' ends and kept by advancing
-  // one end or neither, without branches (in TreePM about half the particles of an opened node
-  // lie beyond the cut-off, a branch no predictor learns).
+  // Each of a node's particles, tested alone (scan_leaf; in TreePM about half the particles of
+  // an opened node lie beyond the cut-off). The particles share their node's nearest image
+  // when the node's cube lies within half a box of the group's centre, less a margin for
+  // rounding (always, short of a cut-off near half the box); otherwise each takes its own.
   const double cutoff2 = rules.split ? cutoff * cutoff : std::numeric_limits<double>::infinity();
-  auto add_particles = [&](const TreeNode& node) {
-    std::size_t f = list.far.size(), m = list.near.size();
-    list.far.resize(f + static_cast<std::size_t>(node.count));
-    list.near.resize(m + static_cast<std::size_t>(node.count));
-    for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-      const double hp = std::max(g.h_max, spline_[k]);
-      const double d2 = box_distance2(g, pos_[k]);
-      const bool keep = d2 <= cutoff2;
-      // Strictly beyond (d2 > 0): a particle inside the box may be one of the targets.
-      const bool far = d2 > 0.0 && d2 >= hp * hp;
-      list.far[f] = k;
-      list.near[m] = k;
-      f += static_cast<std::size_t>(keep & far);
-      m += static_cast<std::size_t>(keep & !far);
+  LeafScanBox scan{g.centre, g.half, {}, g.h_max, cutoff2};
+  const double half_box = 0.5 * config_.box_size, margin = 1e-9 * config_.box_size;
+  auto shared_shift = [&](const TreeNode& node, const NodeOffsets& at) {
+    if (!config_.periodic) return true;
+    const double reach = 0.5 * node.side + margin;
+    const double offsets[3] = {node.centre.x - g.centre.x, node.centre.y - g.centre.y, node.centre.z - g.centre.z};
+    const double images[3] = {at.ox, at.oy, at.oz};
+    for (int d = 0; d < 3; ++d) {
+      if (std::fabs(images[d]) + reach >= half_box) return false;
+      // image() leaves an offset within half a box as it is, and moves any other by whole boxes.
+      scan.shift[d] = std::fabs(offsets[d]) <= half_box ? 0.0 : -config_.box_size * std::nearbyint(offsets[d] / config_.box_size);
     }
-    list.far.resize(f);
-    list.near.resize(m);
+    return true;
+  };
+  auto add_particles = [&](const TreeNode& node, const NodeOffsets& at) {
+    const auto f = static_cast<std::int32_t>(list.far.size()), m = static_cast<std::int32_t>(list.near.size());
+    std::int32_t far_count = f, near_count = m;
+    list.far.resize(static_cast<std::size_t>(f + node.count + 8));
+    list.near.resize(static_cast<std::size_t>(m + node.count + 8));
+    if (shared_shift(node, at)) {
+      scan_leaf(pos_.data(), spline_.data(), node.first, node.count, scan, list.far.data(), &far_count,
+                list.near.data(), &near_count);
+    } else {
+      for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
+        const double hp = std::max(g.h_max, spline_[k]);
+        const double d2 = box_distance2(g, pos_[k]);
+        const bool keep = d2 <= cutoff2;
+        const bool far = d2 > 0.0 && d2 >= hp * hp;
+        list.far[static_cast<std::size_t>(far_count)] = k;
+        list.near[static_cast<std::size_t>(near_count)] = k;
+        far_count += (keep & far) ? 1 : 0;
+        near_count += (keep & !far) ? 1 : 0;
+      }
+    }
+    list.far.resize(static_cast<std::size_t>(far_count));
+    list.near.resize(static_cast<std::size_t>(near_count));
   };
   // All of a node's particles, decided for the whole node (Bulk::near or Bulk::far).
   auto add_whole = [&](const TreeNode& node, Bulk bulk) {
@@ -110,13 +131,13 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
           if (bulk != Bulk::mixed)
             add_whole(node, bulk);
           else
-            add_particles(node);
+            add_particles(node, o);
         } else if (const Bulk bulk = classify_leaf(g.half, g.h_max, node, o.ox, o.oy, o.oz, o.d2box, o.h, slack);
                    bulk != Bulk::mixed) {
           // Decided for the whole leaf, so its particles need no test of their own.
           add_whole(node, bulk);
         } else {
-          add_particles(node);
+          add_particles(node, o);
         }
         n = node.next;
         break;
