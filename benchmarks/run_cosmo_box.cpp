@@ -1,7 +1,7 @@
 // Whole-run benchmark of a periodic cosmological box of gas and dark matter from z = 49 to z = 0 without cooling: wall
 // time, steps, time per task kind (mesh, tree, hydro) and memory per particle, written as JSON. Usage:
 // fountain_cosmo_bench [-n 64] [--box 64] [--threads N] [--a-end 1] [--max-dln-a 0.01] [--mesh-cells M]
-// [--viscosity-reconstruction] [--json FILE].
+// [--viscosity-reconstruction] [--rebuild-skin S] [--json FILE].
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -32,6 +32,8 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   app.add_option("--max-dln-a", max_dln_a, "time_integration.max_dln_a");
   int mesh_cells = 0;
   app.add_option("--mesh-cells", mesh_cells, "gravity.mesh_cells (0: chosen from the particle count)");
+  double skin = SpaceConfig::default_skin(true);
+  app.add_option("--rebuild-skin", skin, "space.rebuild_skin (default: a comoving run's)");
   bool reconstruction = false;
   app.add_flag("--viscosity-reconstruction", reconstruction, "hydro.viscosity_reconstruction");
   app.add_option("--json", json_path);
@@ -61,6 +63,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   c.gravity.softening_gas = 0.5 * c.gravity.softening_dark_matter;
   c.gravity.mesh_cells = mesh_cells;
   c.hydro.viscosity_reconstruction = reconstruction;
+  c.space.skin = skin;
   const std::size_t n = ic.gas.size() + ic.dark_matter.size();
   Engine e(c, to_run_particles(std::move(ic.gas)), to_run_particles(std::move(ic.dark_matter)));
   e.initialise();
@@ -99,10 +102,10 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
   for (const auto& [name, s] : kind_s) kinds += fmt::format("\"{}\": {:.3f}, ", name, s);
   const std::string json = fmt::format(
       "{{\"problem\": \"cosmological_box\", \"particles_per_side\": {}, \"particles\": {}, \"box_mpc_h\": {}, "
-      "\"z_start\": {}, \"a_end\": {}, \"max_dln_a\": {}, \"mesh_cells\": {}, \"viscosity_reconstruction\": {}, \"threads\": {}, \"setup_s\": {:.3f}, \"wall_s\": {:.3f}, "
+      "\"z_start\": {}, \"a_end\": {}, \"max_dln_a\": {}, \"mesh_cells\": {}, \"viscosity_reconstruction\": {}, \"rebuild_skin\": {}, \"threads\": {}, \"setup_s\": {:.3f}, \"wall_s\": {:.3f}, "
       "\"steps\": {}, \"particle_updates\": {:.6g}, \"task_seconds\": {{{}\"outside_tasks\": {:.3f}}}, "
       "\"graph_wall_s\": {:.3f}, \"rebuilds\": {}, \"rebuild_wall_s\": {:.3f}, \"peak_rss_bytes_per_particle\": {:.1f}}}\n",
-      per_side, n, box, z_start, a_end, max_dln_a, gravity::LongRangeForce::choose_cells(mesh_cells, n), reconstruction,
+      per_side, n, box, z_start, a_end, max_dln_a, gravity::LongRangeForce::choose_cells(mesh_cells, n), reconstruction, c.space.skin,
       e.threads(), setup, wall, e.steps(), updates, kinds,
       wall * e.threads() - busy, e.graph_seconds() - graph_s_before, e.space().rebuild_count() - rebuilds_before,
       e.rebuild_seconds() - rebuild_s_before, static_cast<double>(ru.ru_maxrss) * 1024.0 / static_cast<double>(n));

@@ -96,7 +96,8 @@ RunConfig RunConfig::from(const ParameterFile& p) {
   c.space.split_size = static_cast<int>(p.integer("space.cell_split_size"));
   c.space.top_cells = static_cast<int>(p.integer("space.top_cells"));
   c.space.top_cells_origin = p.where("space.top_cells");
-  c.space.skin = p.real("space.rebuild_skin");
+  c.space.skin = p.text("space.rebuild_skin") == "auto" ? SpaceConfig::default_skin(c.comoving.enabled)
+                                                         : p.real("space.rebuild_skin");
   c.repartition_imbalance = p.real("domain.repartition_imbalance");
   c.repartition_min_steps = p.integer("domain.repartition_min_steps");
   c.message_bytes = static_cast<std::size_t>(p.integer("domain.message_bytes"));

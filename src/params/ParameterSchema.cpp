@@ -200,8 +200,8 @@ const std::vector<ParamSpec>& parameter_schema() {
       // space
       integer("space.cell_split_size", "256", 8, 1e6, "Octree cells with more particles than this are split."),
       integer("space.top_cells", "0", 0, 128, "Top-level cells along the longest box side; 0 chooses from the particle number. At most one top cell per particle (or 64 in all) is allowed."),
-      real("space.rebuild_skin", "0.25", 0, 10,
-           "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin.", true),
+      choice_or_number("space.rebuild_skin", "auto", {"auto"}, 0.01, 10,
+                       "Cells cover (1 + skin) times their largest h; the graph is rebuilt when h growth plus motion use up the skin. 'auto': 0.25, or 0.5 in a comoving run (whose rebuilds follow the motion, not h)."),
       // domain decomposition (MPI)
       real("domain.repartition_imbalance", "0.1", 0, inf,
            "Across MPI ranks: when the cells are recut, their owners are chosen anew if, in the work measured since they were last chosen, the most loaded rank's exceeds the mean by more than this fraction (0: at every recut that domain.repartition_min_steps allows)."),

@@ -22,6 +22,10 @@ struct SpaceConfig {
   int top_cells = 0;        // top-level cells along the longest side; 0 = automatic
   std::string top_cells_origin = "key 'space.top_cells'";  // where it was set, for messages
   double skin = 0.25;       // leaves cover (1 + skin) h_max
+  // space.rebuild_skin's 'auto'. A comoving box spends its skin on bulk motion: twice the skin
+  // means fewer rebuilds at no cost in the SPH loops (docs/performance.md, "Cosmological box");
+  // elsewhere 0.25 suits, and small periodic boxes keep their reach.
+  static double default_skin(bool comoving) { return comoving ? 0.5 : 0.25; }
 };
 
 class Space {
