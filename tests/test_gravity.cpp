@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <iomanip>
 #include <iostream>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <thread>
@@ -396,6 +397,36 @@ TEST(GravityTree, RefitFollowsMovedParticles) {
 
   EXPECT_THROW(tight.refit(std::span(nudged.x).first(10), std::span(nudged.m).first(10), std::span(nudged.eps).first(10)),
                std::invalid_argument);
+}
+
+// A bulk flow carries the cubes along: particles all moved by the same step, far larger than
+// the smallest leaves, leave every node's cube its built size about the moved content, so the
+// tree stays tight (a cube grown about its built centre would have doubled: loose).
+TEST(GravityTree, RefitCarriesCubesWithABulkFlow) {
+  const Problem& p = clustered_problem();
+  ParticleSet carried = p.set;
+  const Vec3 flow{0.05, -0.03, 0.02};
+  for (Vec3& x : carried.x) x += flow;
+  GravityTree refitted = p.tree;
+  refitted.refit(carried.x, carried.m, carried.eps);
+  expect_nodes_summarise(refitted, carried);
+  EXPECT_FALSE(refitted.loose());
+  std::size_t followed = 0;
+  double smallest = std::numeric_limits<double>::infinity();
+  for (const TreeNode& node : refitted.nodes()) {
+    EXPECT_LE(node.side, node.built_side * (1.0 + 1e-11));
+    followed += node.centre != node.built_centre ? 1 : 0;
+    smallest = std::min(smallest, node.built_side);
+  }
+  EXPECT_LT(smallest, 0.5 * 0.05);  // the flow moved content out of the smaller cubes
+  EXPECT_GT(followed, refitted.nodes().size() / 2);
+  // Forces as accurate as a fresh tree's.
+  const DirectSums direct = direct_summation(carried.x, carried.m, carried.eps, 1.0);
+  std::vector<double> a_old(carried.x.size());
+  for (std::size_t i = 0; i < a_old.size(); ++i) a_old[i] = norm(direct.acceleration[i]);
+  const ErrorStats e = errors(walk(refitted, targets_of(carried, &a_old), with_alpha(0.01)), direct);
+  EXPECT_LT(e.median, kTargetMedian);
+  EXPECT_LT(e.p99, kTargetP99);
 }
 
 // The refit in groups (the engine's tree tasks), groups taken in any order and on two threads

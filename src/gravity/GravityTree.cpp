@@ -196,7 +196,7 @@ void GravityTree::build(std::int32_t first, std::int32_t count, const Vec3& cent
                         std::vector<SortItem>& items, std::vector<SortItem>& scratch) {
   const auto self = static_cast<std::int32_t>(nodes_.size());
   TreeNode node;
-  node.centre = centre;
+  node.centre = node.built_centre = centre;
   node.side = side;
   node.built_side = side;
   node.first = first;
@@ -245,18 +245,39 @@ bool GravityTree::node_moments(std::int32_t n) {
   node.max_softening = 0.0;
   node.min_softening = std::numeric_limits<double>::infinity();
   node.second_moment = 0.0;
+  node.centre = node.built_centre;
   node.side = node.built_side;
   Vec3 weighted;
-  double reach = 0.0;  // how far from the centre, along an axis, the node's content extends
+  // The box around the node's content: the particles, or the children's boxes.
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+  auto enclose = [&](const Vec3& a, const Vec3& b) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], a[d]);
+      hi[d] = std::max(hi[d], b[d]);
+    }
+  };
+  // The built cube while it holds the box, otherwise the cube about the box, no smaller than
+  // the built one and grown by a margin for the rounding of the box's midpoint (a larger cube
+  // only opens more).
+  auto fit_cube = [&] {
+    node.content_lo = lo;
+    node.content_hi = hi;
+    if (!(lo.x <= hi.x)) return;  // no content
+    const double reach = std::max(farthest(lo - node.built_centre), farthest(hi - node.built_centre));
+    if (2.0 * reach <= node.built_side) return;
+    node.centre = 0.5 * (lo + hi);
+    node.side = std::max(node.built_side, farthest(hi - lo)) * (1.0 + 1e-12);
+  };
   if (node.first_child < 0) {
     for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
       node.mass += mass_[k];
       weighted += mass_[k] * pos_[k];
       node.max_softening = std::max(node.max_softening, eps_[static_cast<std::size_t>(k)]);
       node.min_softening = std::min(node.min_softening, eps_[static_cast<std::size_t>(k)]);
-      reach = std::max(reach, farthest(pos_[k] - node.centre));
+      enclose(pos_[k], pos_[k]);
     }
-    node.side = std::max(node.side, 2.0 * reach);
+    fit_cube();
     // A massless node still needs a finite position for the distance tests.
     node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
     for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
@@ -269,19 +290,16 @@ bool GravityTree::node_moments(std::int32_t n) {
   }
   // The last child's `next` is its parent's (a tree assembled across ranks keeps some subtrees
   // apart from the preorder of the array, so the children are found by the links alone).
-  bool grown = false;
   for (std::int32_t c = node.first_child; c >= 0 && c != node.next; c = nodes_[c].next) {
     const TreeNode& child = nodes_[c];
     node.mass += child.mass;
     weighted += child.mass * child.com;
     node.max_softening = std::max(node.max_softening, child.max_softening);
     node.min_softening = std::min(node.min_softening, child.min_softening);
-    reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
-    grown = grown || child.side != child.built_side;
+    enclose(child.content_lo, child.content_hi);
   }
   if (!(node.min_softening <= node.max_softening)) node.min_softening = 0.0;  // no child
-  // The margin covers the rounding of the sum above: a larger cube only opens more.
-  if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
+  fit_cube();
   node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
   for (std::int32_t c = node.first_child; c >= 0 && c != node.next; c = nodes_[c].next) {
     const TreeNode& child = nodes_[c];

@@ -56,6 +56,8 @@ struct WalkConfig {
 struct TreeNode {
   Vec3 centre;  // geometric centre of the cube
   double side = 0.0;
+  Vec3 built_centre;  // the centre when built; a refit keeps it while the built cube holds the node
+  Vec3 content_lo, content_hi;  // the box around the node's particles (empty: lo > hi)
   Vec3 com;
   double mass = 0.0;
   double max_softening = 0.0;  // largest Plummer-equivalent eps of the particles inside
@@ -83,12 +85,14 @@ class GravityTree {
 
   // Keeps the topology and the particles' tree order, and recomputes every node from the
   // sources' new positions, masses and softenings (same count, same source indices): moments,
-  // and cubes grown about their built centres until they hold their particles again, so every
-  // opening test stays as valid as after a build. O(N) and no sort, for the steps between
-  // rebuilds. Unchanged sources give the built tree back, bit for bit.
+  // and cubes that hold their particles again, so every opening test stays as valid as after a
+  // build: the built cube while it still holds them, otherwise the smallest cube about their
+  // bounding box no smaller than the built one (a node carried by a bulk flow keeps its size).
+  // O(N) and no sort, for the steps between rebuilds. Unchanged sources give the built tree
+  // back, bit for bit.
   void refit(std::span<const Vec3> positions, std::span<const double> masses, std::span<const double> softenings);
-  // Whether a refit has grown some node's cube past twice its built side: the walk then opens
-  // more than a fresh tree would, and the caller should build anew.
+  // Whether a refit has grown some node's cube past twice its built side (its particles have
+  // spread): the walk then opens more than a fresh tree would, and the caller should build anew.
   bool loose() const { return loose_; }
 
   // The same refit in parts, so that tasks can share it out: at its build the tree deals its

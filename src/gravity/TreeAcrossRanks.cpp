@@ -624,7 +624,7 @@ class TreeAssembler {
       const auto here = static_cast<std::int32_t>(tree_.nodes_.size());
       if (top.kind == Kind::internal) {
         TreeNode node;
-        node.centre = top.cube.centre;
+        node.centre = node.built_centre = top.cube.centre;
         node.side = node.built_side = top.cube.side;
         node.count = static_cast<std::int32_t>(top.total);
         const std::int32_t at = t == 0 ? 0 : here;  // the root in its kept place
