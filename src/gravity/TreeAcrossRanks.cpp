@@ -704,7 +704,10 @@ class TreeAssembler {
     // Another rank's part as the whole tree: its root goes to node 0 (nothing links to it).
     if (top_[0].kind == Kind::held && top_[0].owner != ranks_->rank())
       tree_.nodes_[0] = tree_.nodes_[static_cast<std::size_t>(entry[0])];
-    for (auto t = top_internal.rbegin(); t != top_internal.rend(); ++t) tree_.node_moments(*t);
+    // A top node's content may spread while each of its parts stays tight (the parts drift
+    // apart): as in one rank's tree, that makes the tree loose. Every rank computes these
+    // nodes from the same parts, so all agree.
+    for (auto t = top_internal.rbegin(); t != top_internal.rend(); ++t) loose_ = tree_.node_moments(*t) || loose_;
   }
 
   TreeMessages* ranks_ = nullptr;  // the present call's
