@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """A model of a large zoom's parallel efficiency on many nodes, from figures measured here.
 
-Usage: /usr/bin/python3 benchmarks/scaling_model.py [--box benchmarks/results/cosmo_box_64_t2.json]
+Usage: /usr/bin/python3 benchmarks/scaling_model.py [--box benchmarks/results/scaling_model_box.json]
        [--particles 1e8] [--cores 64] [--markdown]
 
 It models the distributed state (docs/design.md, "Next: the distributed state"): one rank per
@@ -16,7 +16,7 @@ import json
 import math
 
 p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-p.add_argument("--box", default="benchmarks/results/cosmo_box_64_t2.json",
+p.add_argument("--box", default="benchmarks/results/scaling_model_box.json",
                help="the cosmological box benchmark's JSON (fountain_cosmo_bench)")
 p.add_argument("--particles", type=float, default=1e8, help="high-resolution particles, gas and dark matter")
 p.add_argument("--cores", type=int, default=64, help="cores per node (one rank per node)")
