@@ -399,15 +399,21 @@ TEST(GravityTree, RefitFollowsMovedParticles) {
                std::invalid_argument);
 }
 
-// A bulk flow carries the cubes along: particles all moved by the same step, far larger than
-// the smallest leaves, leave every node's cube its built size about the moved content, so the
-// tree stays tight (a cube grown about its built centre would have doubled: loose).
+// With fit_cubes a bulk flow carries the cubes along: particles all moved by the same step,
+// far larger than the smallest leaves, leave every node's cube its built size about the moved
+// content, so the tree stays tight; cubes grown about their built centres double: loose.
 TEST(GravityTree, RefitCarriesCubesWithABulkFlow) {
   const Problem& p = clustered_problem();
   ParticleSet carried = p.set;
   const Vec3 flow{0.05, -0.03, 0.02};
   for (Vec3& x : carried.x) x += flow;
-  GravityTree refitted = p.tree;
+  GravityTree grown = p.tree;
+  grown.refit(carried.x, carried.m, carried.eps);
+  expect_nodes_summarise(grown, carried);
+  EXPECT_TRUE(grown.loose());
+  TreeConfig fitting;
+  fitting.fit_cubes = true;
+  GravityTree refitted(p.set.x, p.set.m, p.set.eps, fitting);
   refitted.refit(carried.x, carried.m, carried.eps);
   expect_nodes_summarise(refitted, carried);
   EXPECT_FALSE(refitted.loose());

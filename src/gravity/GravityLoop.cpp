@@ -17,6 +17,7 @@ TreeConfig tree_config(const StepContext& ctx) {
   if (ctx.long_range) {
     config.periodic = true;
     config.box_size = ctx.long_range->mesh.box();
+    config.fit_cubes = true;
   }
   return config;
 }

@@ -248,6 +248,8 @@ bool GravityTree::node_moments(std::int32_t n) {
   node.centre = node.built_centre;
   node.side = node.built_side;
   Vec3 weighted;
+  double reach = 0.0;  // without fit_cubes: how far from the centre the content extends
+  bool grown = false;
   // The box around the node's content: the particles, or the children's boxes.
   constexpr double inf = std::numeric_limits<double>::infinity();
   Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
@@ -257,13 +259,13 @@ bool GravityTree::node_moments(std::int32_t n) {
       hi[d] = std::max(hi[d], b[d]);
     }
   };
-  // The built cube while it holds the box, otherwise the cube about the box, no smaller than
-  // the built one and grown by a margin for the rounding of the box's midpoint (a larger cube
-  // only opens more).
+  // The built cube while it holds the box; otherwise, with fit_cubes, the cube about the box,
+  // no smaller than the built one and grown by a margin for the rounding of the box's
+  // midpoint (a larger cube only opens more). Without, see below.
   auto fit_cube = [&] {
     node.content_lo = lo;
     node.content_hi = hi;
-    if (!(lo.x <= hi.x)) return;  // no content
+    if (!config_.fit_cubes || !(lo.x <= hi.x)) return;  // (or no content)
     const double reach = std::max(farthest(lo - node.built_centre), farthest(hi - node.built_centre));
     if (2.0 * reach <= node.built_side) return;
     node.centre = 0.5 * (lo + hi);
@@ -276,8 +278,11 @@ bool GravityTree::node_moments(std::int32_t n) {
       node.max_softening = std::max(node.max_softening, eps_[static_cast<std::size_t>(k)]);
       node.min_softening = std::min(node.min_softening, eps_[static_cast<std::size_t>(k)]);
       enclose(pos_[k], pos_[k]);
+      if (!config_.fit_cubes) reach = std::max(reach, farthest(pos_[k] - node.centre));
     }
     fit_cube();
+    // The cube grown about its built centre until it holds the particles.
+    if (!config_.fit_cubes) node.side = std::max(node.side, 2.0 * reach);
     // A massless node still needs a finite position for the distance tests.
     node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
     for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
@@ -297,9 +302,16 @@ bool GravityTree::node_moments(std::int32_t n) {
     node.max_softening = std::max(node.max_softening, child.max_softening);
     node.min_softening = std::min(node.min_softening, child.min_softening);
     enclose(child.content_lo, child.content_hi);
+    if (!config_.fit_cubes) {
+      reach = std::max(reach, farthest(child.centre - node.centre) + 0.5 * child.side);
+      grown = grown || child.side != child.built_side;
+    }
   }
   if (!(node.min_softening <= node.max_softening)) node.min_softening = 0.0;  // no child
   fit_cube();
+  // The cube grown about its built centre to hold its children's once one has grown; the
+  // margin covers the rounding of the sum above.
+  if (grown) node.side = std::max(node.side, 2.0 * reach * (1.0 + 1e-12));
   node.com = node.mass > 0.0 ? weighted * (1.0 / node.mass) : node.centre;
   for (std::int32_t c = node.first_child; c >= 0 && c != node.next; c = nodes_[c].next) {
     const TreeNode& child = nodes_[c];

@@ -23,6 +23,11 @@ struct TreeConfig {
   // included, comes from PeriodicMesh. Walks on a periodic tree need WalkConfig::split.
   bool periodic = false;
   double box_size = 0.0;
+  // How a refit fits a cube whose content has left it: false grows it about its built centre;
+  // true takes the cube about the content, so a node carried by a bulk flow keeps its size
+  // (the engine's periodic runs, where flows carry whole regions between rebuilds; the
+  // isolated runs keep the first rule, with which their results were validated).
+  bool fit_cubes = false;
 };
 
 // The relative opening criterion for a node of mass M and side l whose centre of mass is at
@@ -86,8 +91,9 @@ class GravityTree {
   // Keeps the topology and the particles' tree order, and recomputes every node from the
   // sources' new positions, masses and softenings (same count, same source indices): moments,
   // and cubes that hold their particles again, so every opening test stays as valid as after a
-  // build: the built cube while it still holds them, otherwise the smallest cube about their
-  // bounding box no smaller than the built one (a node carried by a bulk flow keeps its size).
+  // build: the built cube while it still holds them, otherwise that cube grown about its
+  // centre or (TreeConfig::fit_cubes) the cube about their bounding box no smaller than the
+  // built one.
   // O(N) and no sort, for the steps between rebuilds. Unchanged sources give the built tree
   // back, bit for bit.
   void refit(std::span<const Vec3> positions, std::span<const double> masses, std::span<const double> softenings);
