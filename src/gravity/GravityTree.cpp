@@ -266,8 +266,8 @@ bool GravityTree::node_moments(std::int32_t n) {
     node.content_lo = lo;
     node.content_hi = hi;
     if (!config_.fit_cubes || !(lo.x <= hi.x)) return;  // (or no content)
-    const double reach = std::max(farthest(lo - node.built_centre), farthest(hi - node.built_centre));
-    if (2.0 * reach <= node.built_side) return;
+    const double content_reach = std::max(farthest(lo - node.built_centre), farthest(hi - node.built_centre));
+    if (2.0 * content_reach <= node.built_side) return;
     node.centre = 0.5 * (lo + hi);
     node.side = std::max(node.built_side, farthest(hi - lo)) * (1.0 + 1e-12);
   };

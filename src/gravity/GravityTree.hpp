@@ -226,8 +226,6 @@ class GravityTree {
                NodeOffsets& o) const;
   void walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const;
   void evaluate_group(Group& g, const WalkConfig& config, const InteractionList& list) const;
-  // Squared distance from a point's nearest image to the group's box (0 inside it).
-  double box_distance2(const Group& g, const Vec3& x) const;
   // The same lists with the TreePM short-range factors (GravityWalkShortRange.cpp).
   void evaluate_group_short_range(Group& g, const WalkConfig& config, const InteractionList& list) const;
   // The nearest image of an offset along one axis (the offset itself for open boundaries).

@@ -34,13 +34,6 @@ inline Bulk classify_leaf(const Vec3& box_half, double h_max, const TreeNode& le
 }
 }  // namespace
 
-
-inline double GravityTree::box_distance2(const Group& g, const Vec3& x) const {
-  const double px = gap(image(x.x - g.centre.x), g.half.x), py = gap(image(x.y - g.centre.y), g.half.y),
-               pz = gap(image(x.z - g.centre.z), g.half.z);
-  return px * px + py * py + pz * pz;
-}
-
 void GravityTree::walk_group(const Group& g, const WalkConfig& config, InteractionList& list) const {
   list.clear();
   const WalkRules rules = walk_rules(config, nodes_[0]);
@@ -52,36 +45,34 @@ void GravityTree::walk_group(const Group& g, const WalkConfig& config, Interacti
   const double cutoff2 = rules.split ? cutoff * cutoff : std::numeric_limits<double>::infinity();
   LeafScanBox scan{g.centre, g.half, {}, g.h_max, cutoff2};
   const double half_box = 0.5 * config_.box_size, margin = 1e-9 * config_.box_size;
+  // What image() adds to an offset: nothing within half a box, whole boxes otherwise.
+  auto shift_of = [&](double offset) {
+    return !config_.periodic || std::fabs(offset) <= half_box ? 0.0 : -config_.box_size * std::nearbyint(offset / config_.box_size);
+  };
   auto shared_shift = [&](const TreeNode& node, const NodeOffsets& at) {
     if (!config_.periodic) return true;
     const double reach = 0.5 * node.side + margin;
-    const double offsets[3] = {node.centre.x - g.centre.x, node.centre.y - g.centre.y, node.centre.z - g.centre.z};
     const double images[3] = {at.ox, at.oy, at.oz};
     for (int d = 0; d < 3; ++d) {
       if (std::fabs(images[d]) + reach >= half_box) return false;
-      // image() leaves an offset within half a box as it is, and moves any other by whole boxes.
-      scan.shift[d] = std::fabs(offsets[d]) <= half_box ? 0.0 : -config_.box_size * std::nearbyint(offsets[d] / config_.box_size);
+      scan.shift[d] = shift_of(node.centre[d] - g.centre[d]);
     }
     return true;
   };
   auto add_particles = [&](const TreeNode& node, const NodeOffsets& at) {
-    const auto f = static_cast<std::int32_t>(list.far.size()), m = static_cast<std::int32_t>(list.near.size());
-    std::int32_t far_count = f, near_count = m;
-    list.far.resize(static_cast<std::size_t>(f + node.count + 8));
-    list.near.resize(static_cast<std::size_t>(m + node.count + 8));
+    std::int32_t far_count = static_cast<std::int32_t>(list.far.size()),
+                 near_count = static_cast<std::int32_t>(list.near.size());
+    list.far.resize(static_cast<std::size_t>(far_count + node.count + 8));
+    list.near.resize(static_cast<std::size_t>(near_count + node.count + 8));
     if (shared_shift(node, at)) {
       scan_leaf(pos_.data(), spline_.data(), node.first, node.count, scan, list.far.data(), &far_count,
                 list.near.data(), &near_count);
     } else {
+      // Each particle with its own image: the same test, one particle at a time.
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
-        const double hp = std::max(g.h_max, spline_[k]);
-        const double d2 = box_distance2(g, pos_[k]);
-        const bool keep = d2 <= cutoff2;
-        const bool far = d2 > 0.0 && d2 >= hp * hp;
-        list.far[static_cast<std::size_t>(far_count)] = k;
-        list.near[static_cast<std::size_t>(near_count)] = k;
-        far_count += (keep & far) ? 1 : 0;
-        near_count += (keep & !far) ? 1 : 0;
+        for (int d = 0; d < 3; ++d) scan.shift[d] = shift_of(pos_[k][d] - g.centre[d]);
+        scan_leaf_portable(pos_.data(), spline_.data(), k, 1, scan, list.far.data(), &far_count, list.near.data(),
+                           &near_count);
       }
     }
     list.far.resize(static_cast<std::size_t>(far_count));

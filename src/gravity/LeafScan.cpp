@@ -11,8 +11,8 @@
 
 namespace fountain::gravity {
 
-// The walk's own arithmetic (gap, box_distance2), operation by operation; this file is
-// compiled without fused multiply-adds, so the AVX-512 loop rounds alike.
+// The walk's own arithmetic (gap, and the squared gap to the box), operation by operation;
+// this file is compiled without fused multiply-adds, so the AVX-512 loop rounds alike.
 void scan_leaf_portable(const Vec3* positions, const double* splines, std::int32_t first, std::int32_t count,
                         const LeafScanBox& box, std::int32_t* far, std::int32_t* far_count, std::int32_t* near,
                         std::int32_t* near_count) {
