@@ -14,8 +14,9 @@ namespace fountain::gravity {
 
 namespace {
 
-// Sources per step of a target's particle loops (AVX2's float width).
-constexpr int kSourceLanes = 8;
+// Sources per step of a target's particle loops: AVX-512's float width (one register there,
+// two under AVX2; the same sums in the same order on either).
+constexpr int kSourceLanes = 16;
 // Room past the kept sources: the padding to whole steps, or a whole register of sixteen
 // floats stored at the end of the list.
 constexpr int kKeptSlack = 16;
@@ -74,7 +75,7 @@ struct ParticleSources {
 // not harmonic, so a node's expansion keeps the trace of its second moment as well (the same
 // Taylor terms as softened_node_field; with g_n = 1 they vanish). Pairs beyond the cut-off
 // add nothing. Offsets are nearest images.
-FOUNTAIN_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, const WalkConfig& config,
+FOUNTAIN_WIDE_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& g, const WalkConfig& config,
                                                                      const InteractionList& list) const {
   const ShortRangeSplit& split = *g.short_range;
   const int nt = g.n;
