@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -60,6 +61,73 @@ TEST(SourceSelection, KeepsExactlyTheSourcesWithinTheCutOffInOrderOnEveryPath) {
   }
   EXPECT_GT(kept_total, 50);  // about 6.5% of the sources lie within the cut-off
   RecordProperty("avx512_path", select_within_is_avx512() ? "yes" : "no");
+}
+
+// With the blocks' boxes (bound_blocks), runs of sixteen beyond the cut-off are passed over
+// unread: every path still keeps exactly the sources the plain test keeps, for targets inside,
+// beside and on the cut-off from the boxes, including sources on the boxes' faces.
+TEST(SourceSelection, BlockBoxesPassOverOnlyRunsWithNothingWithinTheCutOff) {
+  std::mt19937_64 rng(23);
+  std::uniform_real_distribution<float> uni(-1.0f, 1.0f), blob(-0.05f, 0.05f);
+  const float r_cut = 0.25f, r_cut2 = r_cut * r_cut;
+  long long kept_total = 0, passed_over = 0, runs = 0;
+  for (int count : {1, 15, 16, 17, 255, 256, 257, 600}) {
+    const auto n = static_cast<std::size_t>(count);
+    std::vector<std::vector<float>> in(8, std::vector<float>(n));
+    // Runs of neighbouring sources, as a walk lists leaves: blobs of 5 to 12 about random centres.
+    for (std::size_t k = 0; k < n;) {
+      const float cx = uni(rng), cy = uni(rng), cz = uni(rng);
+      const std::size_t end = std::min(n, k + 5 + rng() % 8);
+      for (; k < end; ++k) in[0][k] = cx + blob(rng), in[1][k] = cy + blob(rng), in[2][k] = cz + blob(rng);
+    }
+    for (int f = 3; f < 8; ++f)
+      for (std::size_t k = 0; k < n; ++k) in[static_cast<std::size_t>(f)][k] = uni(rng);
+    std::vector<float> boxes;
+    const int stride = bound_blocks(in[0].data(), in[1].data(), in[2].data(), count, boxes);
+    ASSERT_EQ(stride % kSourceBlock, 0);
+    ASSERT_GE(stride * kSourceBlock, count);
+    // Targets: random ones, and ones exactly the cut-off beyond a box's face along x (the
+    // box's gap is then r_cut, which the strict test drops, as it drops the face's source).
+    std::vector<std::array<float, 3>> targets;
+    for (int t = 0; t < 40; ++t) targets.push_back({uni(rng), uni(rng), uni(rng)});
+    for (int b = 0; b * kSourceBlock < count; ++b) {
+      const float hi_x = boxes[static_cast<std::size_t>(3 * stride + b)], lo_y = boxes[static_cast<std::size_t>(stride + b)];
+      targets.push_back({hi_x + r_cut, lo_y, boxes[static_cast<std::size_t>(2 * stride + b)]});
+      targets.push_back({hi_x + std::nextafter(r_cut, 0.0f), lo_y, boxes[static_cast<std::size_t>(2 * stride + b)]});
+    }
+    const float* in_ptr[8];
+    for (int f = 0; f < 8; ++f) in_ptr[f] = in[static_cast<std::size_t>(f)].data();
+    for (const auto& [xt, yt, zt] : targets) {
+      std::vector<std::size_t> expected;
+      for (std::size_t k = 0; k < n; ++k) {
+        const float dx = xt - in[0][k], dy = yt - in[1][k], dz = zt - in[2][k];
+        if (dx * dx + dy * dy + dz * dz < r_cut2) expected.push_back(k);
+      }
+      kept_total += static_cast<long long>(expected.size());
+      for (int b = 0; b * kSourceBlock < count; ++b, ++runs) {
+        bool any = false;
+        for (std::size_t i : expected) any = any || static_cast<int>(i) / kSourceBlock == b;
+        passed_over += any ? 0 : 1;
+      }
+      for (bool portable : {false, true}) {
+        std::vector<std::vector<float>> out(8, std::vector<float>(n + 16));
+        float* out_ptr[8];
+        for (int f = 0; f < 8; ++f) out_ptr[f] = out[static_cast<std::size_t>(f)].data();
+        std::vector<float> r2;
+        std::vector<std::int32_t> kept;
+        const SourceFields fields{in_ptr, out_ptr, 8, count, boxes.data(), stride};
+        const int m = portable ? select_within_portable(fields, xt, yt, zt, r_cut2, r2, kept)
+                               : select_within(fields, xt, yt, zt, r_cut2, r2, kept);
+        ASSERT_EQ(m, static_cast<int>(expected.size())) << "count " << count << " portable " << portable;
+        for (std::size_t i = 0; i < expected.size(); ++i)
+          for (int f = 0; f < 8; ++f)
+            ASSERT_EQ(out[static_cast<std::size_t>(f)][i], in[static_cast<std::size_t>(f)][expected[i]])
+                << "count " << count << " field " << f << " kept " << i << " portable " << portable;
+      }
+    }
+  }
+  EXPECT_GT(kept_total, 300);
+  EXPECT_GT(passed_over, runs / 2);  // the boxes have runs to pass over
 }
 
 // A leaf's particles against a group's box: each goes to the far list (beyond the box and

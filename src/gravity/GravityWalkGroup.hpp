@@ -63,14 +63,14 @@ inline IndexKey index_key(std::int32_t i) { return {static_cast<float>(i >> 12),
 // The float loops' scalings for one group (evaluate_group, evaluate_group_short_range):
 // lengths in the tree's length unit, a source's G m in length^2 x acceleration (a
 // quadrupole's G Q in length^4 x acceleration), potentials in length x acceleration, with
-// accelerations in the group's accel_unit. Lanes: the group padded to 8, 16 or 32.
+// accelerations in the group's accel_unit. Lanes: the group padded to 8, 16, 32 or 64.
 struct FloatUnits {
   int lanes;
   double unit_inv, gm_scale, q_scale, pot_unit;
 };
 inline FloatUnits float_units(int targets, double length_unit, double accel_unit) {
   FloatUnits f;
-  f.lanes = targets <= 8 ? 8 : targets <= 16 ? 16 : kGroupSize;
+  f.lanes = targets <= 8 ? 8 : targets <= 16 ? 16 : targets <= 32 ? 32 : targets <= 64 ? 64 : kGroupSize;
   f.unit_inv = 1.0 / length_unit;
   f.gm_scale = f.unit_inv * f.unit_inv / accel_unit;
   f.q_scale = f.gm_scale * f.unit_inv * f.unit_inv;
