@@ -127,7 +127,7 @@ FOUNTAIN_WIDE_VECTOR_CLONES void GravityTree::evaluate_group_short_range(Group& 
   }
   // Particles: one group's list reaches every source within r_cut of any of its targets,
   // several times the ~(4/3) pi r_cut^3 n each target needs, so each target keeps its own
-  // sources (in list order) before the factors are computed, eight at a time over sources.
+  // sources (in list order) before the factors are computed, sixteen at a time over sources.
   // Dropped pairs are those beyond the cut-off, which add nothing.
   thread_local ParticleSources far, near;
   // The far list's pairs need no softening or index keys.
