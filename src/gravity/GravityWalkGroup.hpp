@@ -70,7 +70,7 @@ struct FloatUnits {
 };
 inline FloatUnits float_units(int targets, double length_unit, double accel_unit) {
   FloatUnits f;
-  f.lanes = targets <= 8 ? 8 : targets <= 16 ? 16 : targets <= 32 ? 32 : targets <= 64 ? 64 : kGroupSize;
+  f.lanes = targets <= 8 ? 8 : targets <= 16 ? 16 : targets <= 32 ? 32 : kGroupSize;
   f.unit_inv = 1.0 / length_unit;
   f.gm_scale = f.unit_inv * f.unit_inv / accel_unit;
   f.q_scale = f.gm_scale * f.unit_inv * f.unit_inv;

@@ -28,8 +28,7 @@ struct ParticleSources {
   std::vector<float> x, y, z, gm, h, h_inv, key_hi, key_lo;
   std::vector<std::int32_t> kept;  // scratch of the portable selection
   std::vector<float> r2;
-  std::vector<float> blocks;  // bound_blocks()'s boxes of the sources
-  int block_stride = 0;
+  std::vector<float> blocks;  // bound_blocks()'s boxes of the sources: six arrays
   // The kept sources' fields, contiguous so that the pair loops vectorise.
   std::vector<float> kx, ky, kz, kgm, kh, kh_inv, kkey_hi, kkey_lo;
   int count = 0, kept_count = 0;
@@ -47,7 +46,7 @@ struct ParticleSources {
     const IndexKey none = index_key(-1);
     key_hi[list.size()] = none.hi;
     key_lo[list.size()] = none.lo;
-    block_stride = bound_blocks(x.data(), y.data(), z.data(), count, blocks);
+    bound_blocks(x.data(), y.data(), z.data(), count, blocks);
   }
 
   // The sources with squared distance below r_cut2 from the target, in list order, padded by
@@ -62,7 +61,8 @@ struct ParticleSources {
     const float* in[] = {x.data(), y.data(), z.data(), gm.data(), h.data(), h_inv.data(), key_hi.data(), key_lo.data()};
     float* out[] = {kx.data(), ky.data(), kz.data(), kgm.data(), kh.data(), kh_inv.data(), kkey_hi.data(), kkey_lo.data()};
     const int fields = softened ? 8 : 4;
-    int m = select_within(SourceFields{in, out, fields, count, blocks.data(), block_stride}, xt, yt, zt, r_cut2, r2, kept);
+    const SourceFields sources{in, out, fields, count, blocks.data(), static_cast<int>(blocks.size() / 6)};
+    int m = select_within(sources, xt, yt, zt, r_cut2, r2, kept);
     kept_count = m;
     for (; m % kSourceLanes != 0; ++m)
       for (int f = 0; f < fields; ++f) out[f][m] = in[f][sentinel];
