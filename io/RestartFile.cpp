@@ -281,10 +281,8 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
   if (stored != master_checksum(s, n_gas, n_dm, s.serial, names))
     throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
   const bool shared = share.ranks > 1;
-  if (shared && n_dm > 0)
-    throw InputError(fmt::format("{}: holds {} collisionless particles, which a run without gravity cannot have", path,
-                                 n_dm));
   s.gas_total = n_gas;
+  s.dm_total = n_dm;
   s.gas_shared = shared;
   if (!shared) {
     s.gas.resize(n_gas);
@@ -319,9 +317,13 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
     if (shared) {
       for (std::uint64_t i : p.gas_index)
         if (i >= n_gas) throw InputError(fmt::format("{}: holds the place {} of a run of {} gas particles", piece, i, n_gas));
-      if (p.dm.size() > 0) throw InputError(fmt::format("{}: holds collisionless particles the master does not count", piece));
+      for (std::uint64_t i : p.dm_index)
+        if (i >= n_dm)
+          throw InputError(fmt::format("{}: holds the place {} of a run of {} collisionless particles", piece, i, n_dm));
       append_restart_fields(s.gas, p.gas);
+      append_restart_fields(s.dm, p.dm);
       s.gas_places.insert(s.gas_places.end(), p.gas_index.begin(), p.gas_index.end());
+      s.dm_places.insert(s.dm_places.end(), p.dm_index.begin(), p.dm_index.end());
       continue;
     }
     place(s.gas, p.gas, p.gas_index, gas_filled, piece, "gas");
@@ -370,6 +372,7 @@ RestartState read_restart(const std::string& path, const RestartShare& share) {
   const std::uint64_t n_dm = f.read_attribute_uint64("/Restart", "CollisionlessParticles").at(0);
   if (f.exists("/Restart/Pieces")) return read_restart_set(f, path, std::move(s), n_gas, n_dm, share);
   s.gas_total = n_gas;
+  s.dm_total = n_dm;
   s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
   s.dm = read_particles<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, "collisionless");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");

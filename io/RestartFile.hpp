@@ -43,6 +43,9 @@ struct RestartState {
   bool gas_shared = false;
   std::vector<std::uint64_t> gas_places;
   std::uint64_t gas_total = 0;
+  // The same for the collisionless particles (`dm`), read as a share with the gas.
+  std::vector<std::uint64_t> dm_places;
+  std::uint64_t dm_total = 0;
 };
 
 // Writes atomically (temporary file, then rename). Every field of the gas (/Gas) and of the

@@ -322,9 +322,9 @@ TEST_F(TwoRanks, ScatteredParticlesComeBackWhole) {
   const std::vector<std::size_t> picks{5, 2, 400, 77};
   std::vector<char> buffer;
   MessageWriter w(buffer);
-  pack_gas_particles(w, sent, picks);
+  pack_particles(w, sent, picks);
   MessageReader r(buffer);
-  unpack_gas_particles(r, got, picks);
+  unpack_particles(r, got, picks);
   EXPECT_TRUE(r.done());
   GasParticles before_copy = before;
   for (std::size_t i = 0; i < gas.size(); ++i) {

@@ -257,6 +257,8 @@ TEST_F(ParticleFields, EachMessageCarriesExactlyTheFlaggedFields) {
   const std::vector<char> gas_all(ranks.gas.size(), 1), dm_all(ranks.dm.size(), 1);
   std::vector<std::size_t> leaf_gas;
   for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) leaf_gas.push_back(i);
+  std::vector<std::size_t> leaf_dm;
+  for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) leaf_dm.push_back(i);
   using namespace message;
   constexpr Messages ghost = ghost_density | ghost_bin | ghost_force_inputs;
 
@@ -288,8 +290,11 @@ TEST_F(ParticleFields, EachMessageCarriesExactlyTheFlaggedFields) {
        [&](auto& w, auto& sp, auto& g, auto&) { pack_moved_gas(w, sp, g, c, gas_all, true); },
        [&](auto& r, auto& sp, auto& g, auto&) { unpack_moved_gas(r, sp, g, c, gas_all, true); }},
       {"migrating particles", migration, 0, 0,
-       [&](auto& w, auto&, auto& g, auto&) { pack_gas_particles(w, g, leaf_gas); },
-       [&](auto& r, auto&, auto& g, auto&) { unpack_gas_particles(r, g, leaf_gas); }},
+       [&](auto& w, auto&, auto& g, auto&) { pack_particles(w, g, leaf_gas); },
+       [&](auto& r, auto&, auto& g, auto&) { unpack_particles(r, g, leaf_gas); }},
+      {"migrating collisionless particles", 0, migration, 0,
+       [&](auto& w, auto&, auto&, auto& d) { pack_particles(w, d, leaf_dm); },
+       [&](auto& r, auto&, auto&, auto& d) { unpack_particles(r, d, leaf_dm); }},
   };
   unsigned seed = 10;
   for (const Case& m : cases) {

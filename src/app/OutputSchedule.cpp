@@ -71,13 +71,10 @@ void SnapshotSeries::write() {
       fmt::format("{}/{}_{:04d}.hdf5", config_.output.directory, config_.output.basename, written_);
   // Rank 0 writes what the particles' owners send it (its own arrays, when they are current).
   std::unique_ptr<io::SnapshotWriter> writer;
-  if (engine_.rank() == 0) {
-    const CollisionlessParticles& dm = engine_.dark_matter();
-    writer = std::make_unique<io::SnapshotWriter>(
-        path, info_,
-        io::SnapshotCounts{engine_.gas_count(), dm.count(Species::DarkMatter), dm.count(Species::LowResDarkMatter),
-                           dm.count(Species::Star)});
-  }
+  const io::SnapshotCounts counts{engine_.gas_count(), engine_.collisionless_count(Species::DarkMatter),
+                                  engine_.collisionless_count(Species::LowResDarkMatter),
+                                  engine_.collisionless_count(Species::Star)};
+  if (engine_.rank() == 0) writer = std::make_unique<io::SnapshotWriter>(path, info_, counts);
   engine_.stream_state([&](const GasParticles& p, std::size_t first, std::size_t n) { writer->add_gas(p, first, n); },
                        [&](const CollisionlessParticles& p, std::size_t first, std::size_t n) {
                          writer->add_collisionless(p, first, n);
@@ -101,7 +98,7 @@ void SnapshotSeries::write() {
       const std::string line = find_groups(fof);
       if (!quiet_) fmt::print(stderr, "{}\n", line);
     }
-    if (out.hop_groups && engine_.gas_count() + engine_.dark_matter().count(Species::Star) > 0) {
+    if (out.hop_groups && engine_.gas_count() + counts.stars > 0) {
       HopRequest hop;
       hop.snapshot = path;
       hop.output = fmt::format("{}/hop_{:04d}.hdf5", out.directory, written_);

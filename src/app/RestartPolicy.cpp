@@ -61,13 +61,14 @@ void RestartPolicy::save() {
     piece.dm.permute(dm_owned);
     const std::vector<std::size_t> places = engine_.run_places(gas_owned);
     piece.gas_index.assign(places.begin(), places.end());
-    piece.dm_index.assign(dm_owned.begin(), dm_owned.end());
+    const std::vector<std::size_t> dm_places = engine_.run_collisionless_places(dm_owned);
+    piece.dm_index.assign(dm_places.begin(), dm_places.end());
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
     io::write_restart_piece((dir / io::restart_piece_name(path, serial_, engine_.rank())).string(), piece);
     (void)engine_.any_rank(false);  // every piece is in place before the master names it
     if (engine_.rank() == 0) {
       io::write_restart_master(path, out, serial_, engine_.ranks(), engine_.gas_count(),
-                               engine_.dark_matter().size());
+                               engine_.collisionless_count());
       io::remove_stale_restart_pieces(path);
     }
   }

@@ -164,16 +164,15 @@ void check_fits_periodic_box(const io::InitialConditions& ic, const std::string&
                                        xs == &ic.gas.x ? ic.gas.id[i] : ic.dm.id[i]));
 }
 
-// The pieces of a restart set the ranks read hold, together, each of the run's places once:
-// each place is counted by the rank whose range holds it (rank q: [n q / R, n (q + 1) / R)).
-void check_pieces_fill_the_run(const io::RestartState& state, const std::string& path,
-                               const domain::RankExchange& ranks) {
-  const std::uint64_t n = state.gas_total;
+// How many of the n places 0 .. n - 1 the ranks' `places` hold, together, each counted once:
+// by the rank whose range holds it (rank q: [n q / R, n (q + 1) / R)).
+std::uint64_t places_held(const std::vector<std::uint64_t>& places, std::uint64_t n, const domain::RankExchange& ranks) {
+  if (n == 0) return 0;
   const auto nranks = static_cast<std::uint64_t>(ranks.size());
   auto first_of = [&](std::uint64_t q) { return (q * n + nranks - 1) / nranks; };
   std::vector<domain::RankExchange::Buffer> to(nranks);
   std::vector<std::uint64_t> mine;
-  for (std::uint64_t p : state.gas_places) {
+  for (std::uint64_t p : places) {
     std::uint64_t q = p * nranks / n;
     while (q + 1 < nranks && first_of(q + 1) <= p) ++q;
     while (q > 0 && first_of(q) > p) --q;
@@ -194,9 +193,17 @@ void check_pieces_fill_the_run(const io::RestartState& state, const std::string&
   long long once = 0;
   for (std::uint64_t p : mine)
     if (p - first < seen.size() && !seen[p - first]) seen[p - first] = 1, ++once;
-  const auto filled = static_cast<std::uint64_t>(ranks.sum(once));
-  if (filled != n)
-    throw InputError(fmt::format("{}: its pieces hold {} of {} gas and 0 of 0 collisionless particles", path, filled, n));
+  return static_cast<std::uint64_t>(ranks.sum(once));
+}
+
+// The pieces of a restart set the ranks read hold, together, each of the run's places once.
+void check_pieces_fill_the_run(const io::RestartState& state, const std::string& path,
+                               const domain::RankExchange& ranks) {
+  const std::uint64_t gas = places_held(state.gas_places, state.gas_total, ranks);
+  const std::uint64_t dm = places_held(state.dm_places, state.dm_total, ranks);
+  if (gas != state.gas_total || dm != state.dm_total)
+    throw InputError(fmt::format("{}: its pieces hold {} of {} gas and {} of {} collisionless particles", path, gas,
+                                 state.gas_total, dm, state.dm_total));
 }
 
 // A restart must continue the same problem: every parameter must match but the threads
@@ -248,16 +255,10 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     read_options.share_rank = ranks->rank();
     read_options.share_ranks = ranks->size();
   }
+  // Collisionless particles are read whole by every rank, which keeps those of its own cells
+  // at the first recut.
   start.ic = io::read_initial_conditions(ic_path, read_options);
-  if (ranks && start.ic.dm.size() > 0) {
-    // Collisionless particles (read whole by every rank) keep every particle on every rank:
-    // the gas is read again, whole.
-    ranks.reset();
-    read_options.share_rank = 0;
-    read_options.share_ranks = 1;
-    start.ic = io::read_initial_conditions(ic_path, read_options);
-  }
-  if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}};
+  if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}, false, 0, {}};
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.
   if (config.comoving.enabled) {
@@ -280,9 +281,11 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     start.share.reset();
     if (state.gas_shared) {
       check_pieces_fill_the_run(state, restart_path(params), *ranks);
-      start.share = Engine::GasShare{0, state.gas_total, std::move(state.gas_places)};
+      start.share = Engine::GasShare{0, state.gas_total, std::move(state.gas_places), true, state.dm_total,
+                                     std::move(state.dm_places)};
     }
-    const std::size_t state_dm = state.dm.size() - state.dm.count(Species::Star);
+    // (Runs with stars, which star formation spawns, keep every particle on every rank.)
+    const std::size_t state_dm = (state.gas_shared ? state.dm_total : state.dm.size()) - state.dm.count(Species::Star);
     if (state_dm != ic.dm.size())
       throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "
                                    "have {}",

@@ -133,12 +133,28 @@ void unpack_particle_range(MessageReader& r, GasParticles& gas, std::size_t firs
   for_each_field_in(gas, message::whole_state, UnpackFields{r, first, count});
 }
 
-void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
+void pack_particle_range(MessageWriter& w, CollisionlessParticles& dm, std::size_t first, std::size_t count) {
+  for_each_field_in(dm, message::whole_state, PackFields{w, first, count});
+}
+
+void unpack_particle_range(MessageReader& r, CollisionlessParticles& dm, std::size_t first, std::size_t count) {
+  for_each_field_in(dm, message::whole_state, UnpackFields{r, first, count});
+}
+
+void pack_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
   for_each_field_in(gas, message::migration, FieldPicks<MessageWriter>{w, indices});
 }
 
-void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices) {
+void unpack_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices) {
   for_each_field_in(gas, message::migration, FieldPicks<MessageReader>{r, indices});
+}
+
+void pack_particles(MessageWriter& w, CollisionlessParticles& dm, std::span<const std::size_t> indices) {
+  for_each_field_in(dm, message::migration, FieldPicks<MessageWriter>{w, indices});
+}
+
+void unpack_particles(MessageReader& r, CollisionlessParticles& dm, std::span<const std::size_t> indices) {
+  for_each_field_in(dm, message::migration, FieldPicks<MessageReader>{r, indices});
 }
 
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c) {

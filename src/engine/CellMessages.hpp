@@ -93,14 +93,18 @@ void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
                       bool ghost_results_sent = false, bool gravity = false);
 
-// Every field of the gas particles at `indices` (in that order).
-void pack_gas_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);
-void unpack_gas_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices);
+// Every field of the particles at `indices` (in that order): a particle migrating at a recut.
+void pack_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);
+void unpack_particles(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices);
+void pack_particles(MessageWriter& w, CollisionlessParticles& dm, std::span<const std::size_t> indices);
+void unpack_particles(MessageReader& r, CollisionlessParticles& dm, std::span<const std::size_t> indices);
 
-// The gas particles [first, first + count), with every field a cell's whole state carries;
+// The particles [first, first + count), with every field a cell's whole state carries;
 // unpacked into the places [first, first + count) of a store at least that long.
 void pack_particle_range(MessageWriter& w, GasParticles& gas, std::size_t first, std::size_t count);
 void unpack_particle_range(MessageReader& r, GasParticles& gas, std::size_t first, std::size_t count);
+void pack_particle_range(MessageWriter& w, CollisionlessParticles& dm, std::size_t first, std::size_t count);
+void unpack_particle_range(MessageReader& r, CollisionlessParticles& dm, std::size_t first, std::size_t count);
 
 // What leaf c's ghost computed, which other cells' force loops read.
 void pack_ghost_results(MessageWriter& w, const Space& space, GasParticles& gas, int c);

@@ -63,12 +63,19 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   if (share) share_places_ = std::move(share->places);
   if (!share_places_.empty() && share_places_.size() != gas_.size())
     throw std::logic_error(fmt::format("a share of {} particles with {} places", gas_.size(), share_places_.size()));
+  dm_shared_ = share && share->dm_shared;
+  dm_total_ = dm_shared_ ? share->dm_total : dm_.size();
+  if (dm_shared_) dm_share_places_ = std::move(share->dm_places);
+  if (dm_shared_ && dm_share_places_.size() != dm_.size())
+    throw std::logic_error(fmt::format("a share of {} collisionless particles with {} places", dm_.size(),
+                                       dm_share_places_.size()));
   // Dark matter alone (a collisionless cosmological run) needs gravity; nothing at all is no run.
-  if (gas_total_ == 0 && (dm_.size() == 0 || !config_.gravity.enabled)) throw InputError("no gas particles to simulate");
-  if (dm_.size() > 0 && !config_.gravity.enabled)
+  if (gas_total_ == 0 && (dm_total_ == 0 || !config_.gravity.enabled)) throw InputError("no gas particles to simulate");
+  if (dm_total_ > 0 && !config_.gravity.enabled)
     throw InputError(fmt::format("the initial conditions hold {} dark matter particles but gravity is off "
                                  "(set gravity.enabled: true)",
-                                 dm_.size()));
+                                 dm_total_));
+  ranks_ = domain::RankExchange::world();
   // A zoom's low-resolution particles soften in proportion to the high-resolution ones by
   // their mass's cube root: the reference is the lightest high-resolution particle (or, with
   // none, the lightest low-resolution one).
@@ -76,6 +83,11 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     double lightest = 0.0;
     for (std::size_t i = 0; i < dm_.size(); ++i)
       if (dm_.species[i] == kind && (lightest == 0.0 || dm_.mass[i] < lightest)) lightest = dm_.mass[i];
+    if (dm_shared_) {  // this rank's pieces of a restart set: the lightest over every rank's
+      const double here = lightest;
+      for (const auto& theirs : ranks_->allgather_values(std::span<const double>(&here, 1), "lightest particle"))
+        if (theirs[0] > 0.0 && (lightest == 0.0 || theirs[0] < lightest)) lightest = theirs[0];
+    }
     if (lightest > 0.0 && config_.gravity.low_res_reference_mass == 0.0) config_.gravity.low_res_reference_mass = lightest;
   }
   ctx_.reset(new StepContext{gas_, space_, config_.hydro, config_.integration, timeline_, dm_, config_.gravity, nullptr, {}});
@@ -91,13 +103,15 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   }
   for (std::size_t i = 0; i < gas_.size(); ++i)
     if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
-  ranks_ = domain::RankExchange::world();
-  // Gravity reads every particle (the tree), and star formation's spawning and feedback read
-  // and change particles anywhere: those runs keep every rank's copy whole, as do runs with
-  // collisionless particles (which without gravity only drift).
+  // Star formation's spawning and feedback read and change particles anywhere, and the
+  // periodic mesh is fed every particle: those runs keep every rank's copy whole.
   if (ranks_)
-    layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(), config_.ranks_hold_shares() && dm_.size() == 0,
+    layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(), config_.ranks_hold_shares(),
                                  config_.repartition_imbalance, config_.repartition_min_steps);
+  if (layout_.halo_mode()) {
+    ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
+    ctx_->collisionless_owned_only = true;
+  }
   if (share && !layout_.halo_mode())
     throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
   // Each rank builds the tree of its own leaves' particles and assembles each step's tree
@@ -106,7 +120,11 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     tree_messages_ = std::make_unique<TreeMessagesOverRanks>(*ranks_);
     ctx_->tree_messages = tree_messages_.get();
     ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
-    if (layout_.halo_mode()) ctx_->leaf_places = &run_first_;
+    if (layout_.halo_mode()) {
+      ctx_->leaf_places = &run_first_;
+      ctx_->leaf_dm_places = &run_dm_first_;
+      ctx_->gas_total = &gas_total_;
+    }
   }
   if (config_.star_formation.enabled) setup_star_formation();
   if (config_.comoving.enabled) setup_comoving();
@@ -554,6 +572,7 @@ std::size_t Engine::activate(Phase phase) {
         active_particles += a && count ? 1 : 0;
         if (ranks_) gas_moved_[i] = a;
       }
+      if (!holds_collisionless(c)) continue;
       for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
         const bool a = ctx_->is_active_dm(i);
         active_particles += a && count ? 1 : 0;

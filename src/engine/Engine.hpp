@@ -64,10 +64,14 @@ class Engine {
  public:
   // The gas one rank read of a run across ranks that hold shares (RunConfig::ranks_hold_shares):
   // the file's rows [first, first + gas.size()) of `total`, or (a restart set's pieces) the
-  // places in the run given one by one.
+  // places in the run given one by one. Collisionless particles are read whole by every rank
+  // from initial conditions, or as a restart set's pieces with their places (dm_shared).
   struct GasShare {
     std::size_t first = 0, total = 0;
     std::vector<std::uint64_t> places;  // empty: first, first + 1, ...
+    bool dm_shared = false;
+    std::size_t dm_total = 0;
+    std::vector<std::uint64_t> dm_places;
   };
   // Without `share`, the gas is every particle of the run.
   Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm = {},
@@ -214,8 +218,14 @@ class Engine {
   // Gas particles on all ranks (gas().size() when alone or while every rank holds all of them;
   // in halo mode each rank holds only the leaves it keeps current).
   std::size_t gas_count() const;
+  // Collisionless particles on all ranks (as gas_count()).
+  std::size_t collisionless_count() const;
+  // Those of species s on all ranks (in halo mode a sum over ranks: every rank calls it).
+  std::size_t collisionless_count(Species s) const;
   // The places in the run's order of this rank's gas particles `local` (indices into gas()).
   std::vector<std::size_t> run_places(const std::vector<std::size_t>& local) const;
+  // The same for collisionless particles of the leaves this rank owns (indices into dark_matter()).
+  std::vector<std::size_t> run_collisionless_places(const std::vector<std::size_t>& local) const;
   // Bytes and messages this rank sent since the start of the run.
   std::uint64_t bytes_sent() const;
   std::uint64_t messages_sent() const;
@@ -256,6 +266,8 @@ class Engine {
   void guess_smoothing_lengths();
   bool mine(int c) const { return layout_.mine(c); }
   bool keeps_current(int c) const { return layout_.keeps_current(c); }
+  // Whether leaf c's collisionless particles are in this rank's arrays (halo mode: its owner's only).
+  bool holds_collisionless(int c) const { return !layout_.halo_mode() || layout_.mine(c); }
   std::vector<std::pair<Vec3, double>> measured_work() const;  // (leaf centre, task ns) over all ranks
   void plan_ghost_exchange();
   void post_receives();
@@ -267,7 +279,8 @@ class Engine {
   void exchange_active_leaves(bool gas_leaves_only, std::vector<char>& buffer, Pack&& pack, Unpack&& unpack,
                               const char* what, bool every_leaf = false);
   void finish_exchanges();
-  void stream_gas(const StatePiece<GasParticles>& consume);  // stream_state's, in halo mode
+  template <class Store>
+  void stream_store(Store& store, const StatePiece<Store>& consume);  // stream_state's, in halo mode
   void combine_wake_requests();  // the limiter's requests of every rank, combined on every rank
   // Calls fn(i) for each gas particle of the leaves drifted in this run of the graph (that
   // this rank holds): the force loop asks to wake only neighbours of active particles, which
@@ -295,9 +308,10 @@ class Engine {
   // grows with the run. The arrivals join the arrays' end (room for all made at once):
   // `arrived(q, at, n, reader)` reads the headers of n particles from q, which are unpacked
   // into at, at + 1, ... after it returns.
-  void send_gas_in_rounds(const std::vector<std::vector<std::size_t>>& to,
-                          const std::function<void(std::size_t, MessageWriter&)>& header,
-                          const std::function<void(int, std::size_t, std::size_t, MessageReader&)>& arrived);
+  template <class Store>
+  void send_in_rounds(Store& store, const std::vector<std::vector<std::size_t>>& to,
+                      const std::function<void(std::size_t, MessageWriter&)>& header,
+                      const std::function<void(int, std::size_t, std::size_t, MessageReader&)>& arrived);
   // Which step end a particle of bin `bin` whose step began at ti_begin is due at, seen from
   // a recut at ti_current_.
   IntegerTime due_end(TimeBin bin, IntegerTime ti_begin) const;
@@ -376,6 +390,14 @@ class Engine {
   // they start in this rank's arrays, for the leaves it keeps current), and how many there are.
   std::vector<std::size_t> run_first_;
   std::size_t gas_total_ = 0;
+  // The same for the collisionless particles, which only their leaf's owner holds (no loop
+  // reads another leaf's): an owned leaf's lie in this rank's arrays in the run's order.
+  std::vector<std::size_t> run_dm_first_;
+  std::size_t dm_total_ = 0;
+  // Before the first recut: the collisionless particles here are a restart set's pieces, with
+  // their places (otherwise every rank read every one, in the run's order).
+  bool dm_shared_ = false;
+  std::vector<std::uint64_t> dm_share_places_;
   // Halo mode before the first recut: this rank's arrays hold the share of the gas it read,
   // from the run's place share_first_ on (the file's order, in which one rank recuts them).
   bool holds_read_share_ = false;
@@ -391,6 +413,9 @@ class Engine {
     std::vector<std::size_t> owned;           // this rank's particles (indices) in the recut's order
     std::vector<std::uint64_t> old_first;     // the leaves before the recut: where each began in the run's order
     std::vector<std::vector<int>> old_holders;  // and the ranks that held it
+    bool dm_everyone = false;                 // every rank held every collisionless particle
+    std::vector<std::uint64_t> dm_place;      // as place and owned, for the collisionless particles
+    std::vector<std::size_t> dm_owned;
   };
   HaloRecut halo_recut_;
   std::vector<tasks::TaskRecord> mpi_records_;  // task times when no timeline is recorded

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <stdexcept>
+#include <type_traits>
 
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
@@ -11,7 +12,9 @@
 
 namespace fountain {
 
-void Engine::stream_gas(const StatePiece<GasParticles>& consume) {
+template <class Store>
+void Engine::stream_store(Store& store, const StatePiece<Store>& consume) {
+  constexpr bool kGas = std::is_same_v<Store, GasParticles>;
   // Runs of consecutive leaves in the run's order with one owner: the leaves cover the run's
   // order end to end, and a rank's arrays hold its leaves in that order, so a run is one
   // stretch of its owner's arrays.
@@ -24,22 +27,25 @@ void Engine::stream_gas(const StatePiece<GasParticles>& consume) {
   for (int c : leaves_in_run_order()) {
     const Cell& cell = space_.cell(c);
     const int owner = layout_.owner(c);
+    const std::size_t first = kGas ? cell.first : cell.dm_first, count = kGas ? cell.count : cell.dm_count;
+    if (count == 0) continue;
     if (!runs.empty() && runs.back().owner == owner) {
-      runs.back().count += cell.count;
+      runs.back().count += count;
     } else {
-      runs.push_back({owner, cell.first, cell.count});
+      runs.push_back({owner, first, count});
     }
-    covered += cell.count;
+    covered += count;
   }
-  if (covered != gas_total_) throw std::logic_error(fmt::format("the leaves hold {} of {} particles", covered, gas_total_));
+  const std::size_t total = kGas ? gas_total_ : dm_total_;
+  if (covered != total) throw std::logic_error(fmt::format("the leaves hold {} of {} particles", covered, total));
   const std::size_t chunk = std::max<std::size_t>(1, config_.output.gather_particles);
   // Both sides walk the same runs in the same order, and messages from one sender arrive in
   // the order sent: rank 0 knows from whom each piece comes and how many there are.
   if (rank() == 0) {
-    GasParticles piece;
+    Store piece;
     for (const OwnedRun& run : runs) {
       if (run.owner == 0) {
-        consume(gas_, run.first, run.count);
+        consume(store, run.first, run.count);
         continue;
       }
       for (std::size_t left = run.count; left > 0;) {
@@ -65,7 +71,7 @@ void Engine::stream_gas(const StatePiece<GasParticles>& consume) {
         buffer.clear();
         MessageWriter w(buffer);
         w.put(static_cast<std::uint64_t>(n));
-        pack_particle_range(w, gas_, at, n);
+        pack_particle_range(w, store, at, n);
         ranks_->send(0, buffer);
       }
     }
@@ -81,8 +87,8 @@ void Engine::stream_state(const StatePiece<GasParticles>& gas, const StatePiece<
     collisionless(dm_, 0, dm_.size());
     return;
   }
-  // Halo mode holds no collisionless particles.
-  stream_gas(gas);
+  stream_store(gas_, gas);
+  stream_store(dm_, collisionless);
 }
 
 }  // namespace fountain

@@ -60,7 +60,7 @@ void leaf_targets(const StepContext& ctx, int c, LeafTargets& out) {
 
 // This rank's sources across ranks: the particles of the leaves it owns, gas and then dark
 // matter, each in the run's order, named by their index in this rank's arrays (as the walks'
-// targets name them). Where the arrays hold only some leaves (halo mode, gas only) a
+// targets name them). Where the arrays hold only some leaves (halo mode) a
 // particle's place in the run is its leaf's place plus its offset in the leaf; otherwise its
 // index.
 struct OwnSources {
@@ -74,13 +74,14 @@ OwnSources own_sources(const StepContext& ctx) {
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   std::vector<std::pair<std::uint64_t, std::size_t>> g;  // (place, index)
-  std::vector<std::size_t> d;
+  std::vector<std::pair<std::uint64_t, std::size_t>> d;  // (place among the collisionless, index)
   for (const int c : ctx.space.leaves()) {
     if (!ctx.owns_leaf(c)) continue;
     const Cell& cell = ctx.space.cell(c);
     const std::size_t first = ctx.leaf_places ? (*ctx.leaf_places)[static_cast<std::size_t>(c)] : cell.first;
     for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) g.emplace_back(first + (i - cell.first), i);
-    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) d.push_back(i);
+    const std::size_t dm_first = ctx.leaf_dm_places ? (*ctx.leaf_dm_places)[static_cast<std::size_t>(c)] : cell.dm_first;
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) d.emplace_back(dm_first + (i - cell.dm_first), i);
   }
   std::sort(g.begin(), g.end());
   std::sort(d.begin(), d.end());
@@ -92,11 +93,12 @@ OwnSources own_sources(const StepContext& ctx) {
     s.places.push_back(place);
     s.names.push_back(static_cast<std::int32_t>(i));
   }
-  for (const std::size_t i : d) {
+  const std::size_t gas_total = ctx.gas_total ? *ctx.gas_total : gas.size();
+  for (const auto& [place, i] : d) {
     s.x.push_back(dm.x[i]);
     s.m.push_back(dm.mass[i]);
     s.eps.push_back(ctx.softening_of(i));
-    s.places.push_back(gas.size() + i);
+    s.places.push_back(gas_total + place);
     s.names.push_back(static_cast<std::int32_t>(gas.size() + i));
   }
   return s;

@@ -55,7 +55,7 @@ inline constexpr Messages halo_after_ghost = 1u << 5;
 // Halo mode's changed gas, third part, in runs with gravity: what the walk writes that a
 // holder's own drift of the leaf reads (the acceleration, for the predicted velocities).
 inline constexpr Messages halo_gravity = 1u << 6;
-// A particle sent whole to another rank (pack_gas_particles): to its top cell's owner at a
+// A particle sent whole to another rank (pack_particles): to its top cell's owner at a
 // recut, or to a holder of its leaf that had no copy of it.
 inline constexpr Messages migration = 1u << 7;
 }  // namespace message

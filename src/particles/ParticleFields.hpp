@@ -189,8 +189,8 @@ inline constexpr auto kCollisionlessFields = [] {
   using namespace message;
   using C = CollisionlessParticles;
   constexpr auto always = InSnapshots::always, stars_only = InSnapshots::stars_only;
-  // As for the gas; collisionless particles never migrate alone (halo mode runs without gravity).
-  constexpr Messages kMadeOnce = whole_state, kStepped = whole_state | step_state;
+  // As for the gas: every field migrates with its particle at a recut (halo mode).
+  constexpr Messages kMadeOnce = whole_state | migration, kStepped = whole_state | step_state | migration;
   return std::tuple{
     field(&C::id, {.key = "id", .name = "ParticleIDs", .units = kNumber,
                    .description = "Unique IDs of the particles",

@@ -68,6 +68,13 @@ struct StepContext {
   // Where each cell's gas starts in the run's order, where this rank's arrays hold only some
   // leaves (halo mode); null when they hold every particle in the run's order.
   const std::vector<std::size_t>* leaf_places = nullptr;
+  // The same for the collisionless particles (halo mode), whose places follow every gas
+  // particle's (*gas_total of them in the run).
+  const std::vector<std::size_t>* leaf_dm_places = nullptr;
+  const std::size_t* gas_total = nullptr;
+  // Halo mode: a leaf's collisionless particles are in the arrays of its owner only (a holder
+  // drifts the leaf's gas, not them).
+  bool collisionless_owned_only = false;
   // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
   enum class TreeUpdate { keep, refit, build };
   TreeUpdate tree_update = TreeUpdate::build;
