@@ -129,7 +129,7 @@ with h5py.File('zero.hdf5', 'w') as f:
   bad_parameter)
     params good.hdf5 out "hydro:
   gamma: soft"; expect_error "hydro.gamma" ;;
-  mpi_hydro_ranks|mpi_gravity_ranks|mpi_feedback_ranks|mpi_uneven_ranks)
+  mpi_hydro_ranks|mpi_gravity_ranks|mpi_collisionless_ranks|mpi_feedback_ranks|mpi_uneven_ranks)
     # Across MPI ranks the run must give the snapshots of one rank, bit for bit, on 2, 3 and 4
     # ranks (oversubscribed): Sod with the timestep limiter (hydro); an Evrard collapse with
     # self-gravity; a rotating sphere with gravity, cooling, MSPH, star formation with spawning
@@ -174,6 +174,17 @@ hydro:
   viscosity_reconstruction: true
 space:
   top_cells: 4" ;;
+      mpi_collisionless_ranks)
+        # The rotating sphere's gas and dark matter (2,000 of each) with gravity, cooling and
+        # MSPH, no star formation, on 4 x 4 x 4 top cells: halo mode, each rank holding only its
+        # own leaves' dark matter; statistics summed 40 particles a message.
+        "$bin" ic sphere -n 2000 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
+        T_END=3e-4 extra="$sphere_physics
+space:
+  top_cells: 4
+output:
+  statistics_every: 5
+  gather_particles: 40" ;;
       mpi_feedback_ranks)
         "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
         T_END=6e-4 extra="$sphere_feedback
@@ -208,6 +219,10 @@ $sphere_physics" ;;
         received=$(sed -n 's/^gravity tree: .* and \([0-9.e+]*\) sources a time.*/\1/p' "run$n.txt")
         awk -v r="$received" 'BEGIN { exit !(r > 0) }' || { cat "run$n.txt"; fail "rank 0 received no other rank's sources"; }
       fi
+      if [ "$case_name" = mpi_collisionless_ranks ]; then
+        grep "^halo mode: rank 0 kept" "run$n.txt" || { cat "run$n.txt"; fail "the sphere was not run in halo mode"; }
+        cmp out1/statistics.txt "out$n/statistics.txt" || fail "statistics differ from the 1-rank run's"
+      fi
       if [ "$case_name" = mpi_feedback_ranks ]; then
         # Each rank assembling its gravity tree from its own subtrees and the other ranks' parts
         # gives the same bits as every rank building the whole tree.
@@ -234,6 +249,22 @@ $sphere_physics" ;;
         echo "$n ranks: owners chosen $chosen times at every recut, $chosen_min with a long span"
       fi
     done
+    if [ "$case_name" = mpi_collisionless_ranks ]; then
+      # A 2-rank restart set (each piece its own leaves' dark matter, with their places) read
+      # on 3 ranks, and a file written whole by one rank read on 2.
+      write_params outB
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --abandon-after-steps 250 > killed.txt 2>&1 || { cat killed.txt; fail "2-rank run to be stopped"; }
+      grep -q "^abandoned after step 250" killed.txt || { cat killed.txt; fail "the 2-rank run did not stop at step 250"; }
+      ls outB/restart_*_rank1.hdf5 > /dev/null || fail "the 2-rank run wrote no restart set"
+      mpirun_n 3 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 3 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
+      write_params outC
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      "$bin" run params.yml -q -t 1 --abandon-after-steps 250 > killed.txt 2>&1 || { cat killed.txt; fail "1-rank run to be stopped"; }
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 2 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outC/snapshot_0001.hdf5
+    fi
     if [ "$case_name" = mpi_gravity_ranks ]; then
       # Stopped half-way on 2 ranks as a kill would stop it, the run continues from its
       # restart set on 3 ranks as the uninterrupted 1-rank run ends.
