@@ -324,10 +324,8 @@ InitialConditions read_gadget_binary_ics(const std::string& path, const IcReadOp
 }  // namespace
 
 InitialConditions read_initial_conditions(const std::string& path, const IcReadOptions& options) {
-  if (options.share_ranks < 1 || options.share_rank < 0 || options.share_rank >= options.share_ranks ||
-      (options.share_ranks > 1 && options.cosmological))
-    throw std::logic_error(fmt::format("initial conditions asked for share {} of {}{}", options.share_rank,
-                                       options.share_ranks, options.cosmological ? " of a cosmological file" : ""));
+  if (options.share_ranks < 1 || options.share_rank < 0 || options.share_rank >= options.share_ranks)
+    throw std::logic_error(fmt::format("initial conditions asked for share {} of {}", options.share_rank, options.share_ranks));
   namespace fs = std::filesystem;
   std::error_code ec;
   // A GADGET binary set split over files is named without its ".0".

@@ -46,11 +46,11 @@ struct IcReadOptions {
   // of types 2, 3 and 5 is read (as Species::LowResDarkMatter, masses per particle).
   bool cosmological = false;
   // A share of the gas for one of share_ranks MPI ranks that each hold their own (runs
-  // without star formation or a periodic mesh; collisionless particles are read whole): the file's gas rows [n r / R, n (r + 1) / R)
-  // for r = share_rank, R = share_ranks, read by hyperslab from HDF5 (a GADGET binary file is
+  // without star formation; collisionless particles are read whole): the file's gas rows
+  // [n r / R, n (r + 1) / R) for r = share_rank, R = share_ranks, read by hyperslab from HDF5 (a GADGET binary file is
   // read whole and cut). Every check of the values still holds per particle; that no gas ID
-  // repeats is checked by share_rank 0 alone, which reads every ID for it. Not with
-  // `cosmological`.
+  // repeats is checked by share_rank 0 alone, which reads every ID for it. A cosmological
+  // share's has_internal_energy speaks for its rows only: the ranks must compare theirs.
   int share_rank = 0, share_ranks = 1;
 };
 

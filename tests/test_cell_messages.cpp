@@ -182,14 +182,14 @@ TEST_F(TwoRanks, GhostResultsFitTheirAnnouncedSizeAndComeBackExactly) {
 
 TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep) {
   // Halo mode sends only the fields a step changes; the rest must be ones that a run without
-  // star formation or periodic gravity never changes but by the drift (positions) or not at
-  // all, or (the potential) that nothing reads of a held copy. With gravity the acceleration
-  // goes too, which a holder's drift reads. A field added to GasParticles fails here until it
+  // star formation never changes but by the drift (positions) or not at all, or (the
+  // potentials) that nothing reads of a held copy. With gravity the acceleration goes too,
+  // which a holder's drift reads, and in periodic runs the mesh's part of it. A field added to GasParticles fails here until it
   // is placed in one list or another.
   GasParticles g;
   std::vector<const void*> sent, unchanged{&g.id, &g.mass, &g.mass_initial, &g.mass_stars_hidden, &g.reservoir,
                                           &g.promoted, &g.promotion_time, &g.feedback_hot_energy, &g.x,
-                                          &g.potential, &g.a_mesh, &g.potential_mesh, &g.wake_bin};
+                                          &g.potential, &g.potential_mesh, &g.wake_bin};
   // The derived fields are changed by a step but worked out again by the holder's own drift.
   std::vector<const void*> derived;
   halo_step_fields(g, [&](auto& f) { sent.push_back(&f); });
@@ -199,6 +199,13 @@ TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep)
     ++gravity_fields;
   });
   EXPECT_EQ(gravity_fields, 1u);
+  // In periodic runs the mesh's acceleration too, which the predicted velocity reads.
+  std::size_t mesh_fields = 0;
+  halo_mesh_fields(g, [&](auto& f) {
+    sent.push_back(&f);
+    ++mesh_fields;
+  });
+  EXPECT_EQ(mesh_fields, 1u);
   g.for_each_derived_field([&](auto& f) { derived.push_back(&f); });
   std::size_t fields = 0;
   g.for_each_field([&](auto& f) {

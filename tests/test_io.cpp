@@ -1093,8 +1093,7 @@ TEST_F(IoTest, RestartSetOfPiecesReadsBackAsTheWholeStateBitwise) {
 
 // Ranks that hold shares read some of a set's pieces each (rank r of R: the pieces p with
 // p % R == r), with each particle's place: together, every particle once, bit for bit the
-// whole read's. A file written whole is read whole, and a set with collisionless particles is
-// refused.
+// whole read's, the collisionless particles as the gas. A file written whole is read whole.
 TEST_F(IoTest, RestartSetReadInSharesGivesEachParticleOnceWithItsPlace) {
   const auto s = restart_state(17, 0);
   const std::string path = file("restart.hdf5");
@@ -1127,8 +1126,23 @@ TEST_F(IoTest, RestartSetReadInSharesGivesEachParticleOnceWithItsPlace) {
   EXPECT_FALSE(alone.gas_shared);
   EXPECT_EQ(alone.gas.size(), s.gas.size());
   const std::string with_dm = file("with_dm.hdf5");
-  write_as_set(restart_state(17, 5), with_dm, 1);
-  EXPECT_THROW(fountain::io::read_restart(with_dm, {0, 2}), InputError);
+  const auto d = restart_state(17, 5);
+  write_as_set(d, with_dm, 1);
+  const auto whole_dm = fountain::io::read_restart(with_dm);
+  std::vector<int> seen(d.dm.size(), 0);
+  for (int r = 0; r < 2; ++r) {
+    const auto share = fountain::io::read_restart(with_dm, {r, 2});
+    EXPECT_EQ(share.dm_total, d.dm.size());
+    ASSERT_EQ(share.dm_places.size(), share.dm.size());
+    for (std::size_t i = 0; i < share.dm.size(); ++i) {
+      const std::size_t p = share.dm_places[i];
+      ASSERT_LT(p, d.dm.size());
+      ++seen[p];
+      EXPECT_EQ(share.dm.id[i], whole_dm.dm.id[p]);
+      EXPECT_TRUE(same_bits(std::vector<Vec3>{share.dm.v_full[i]}, std::vector<Vec3>{whole_dm.dm.v_full[p]}));
+    }
+  }
+  for (int count : seen) EXPECT_EQ(count, 1);
 }
 
 TEST_F(IoTest, RestartSetWithAMissingOrCorruptedPieceIsRefusedByName) {

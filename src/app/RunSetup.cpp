@@ -258,6 +258,17 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
   // Collisionless particles are read whole by every rank, which keeps those of its own cells
   // at the first recut.
   start.ic = io::read_initial_conditions(ic_path, read_options);
+  if (ranks && config.comoving.enabled && start.ic.gas_total > 0) {
+    // Each share says whether its rows give internal energies (0 is "not given"): all must,
+    // or none.
+    const bool rows = start.ic.gas.size() > 0;
+    const long long shares = ranks->sum(rows ? 1 : 0);
+    const long long given = ranks->sum(rows && start.ic.has_internal_energy ? 1 : 0);
+    if (given != 0 && given != shares)
+      throw InputError(fmt::format("{}: some gas particles have an internal energy and some have 0; give all or none",
+                                   ic_path));
+    start.ic.has_internal_energy = given > 0;
+  }
   if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}, false, 0, {}};
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.

@@ -98,7 +98,7 @@ namespace {
 // a step with few active particles most drifted leaves have none, and carry nothing.
 template <class Stream>
 void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                      bool ghost_results_sent, bool gravity) {
+                      bool ghost_results_sent, bool gravity, bool mesh) {
   const Cell& cell = space.cell(c);
   thread_local std::vector<std::size_t> picks;
   picks.clear();
@@ -109,6 +109,7 @@ void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, s
     if (ghost_results_sent) step_fields_after_ghost(gas, fields);
     else halo_step_fields(gas, fields);
     if (gravity) halo_gravity_fields(gas, fields);
+    if (mesh) halo_mesh_fields(gas, fields);
   };
   if (picks.size() == cell.count) carry(FieldSlices<Stream>{s, cell.first, cell.count});
   else carry(FieldPicks<Stream>{s, picks});
@@ -116,13 +117,13 @@ void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, s
 }  // namespace
 
 void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                    bool ghost_results_sent, bool gravity) {
-  moved_gas_fields(w, space, gas, c, moved, ghost_results_sent, gravity);
+                    bool ghost_results_sent, bool gravity, bool mesh) {
+  moved_gas_fields(w, space, gas, c, moved, ghost_results_sent, gravity, mesh);
 }
 
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                      bool ghost_results_sent, bool gravity) {
-  moved_gas_fields(r, space, gas, c, moved, ghost_results_sent, gravity);
+                      bool ghost_results_sent, bool gravity, bool mesh) {
+  moved_gas_fields(r, space, gas, c, moved, ghost_results_sent, gravity, mesh);
 }
 
 void pack_particle_range(MessageWriter& w, GasParticles& gas, std::size_t first, std::size_t count) {

@@ -110,7 +110,7 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
                                  config_.repartition_imbalance, config_.repartition_min_steps);
   if (layout_.halo_mode()) {
     ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
-    ctx_->collisionless_owned_only = true;
+    ctx_->halo_mode = true;
   }
   if (share && !layout_.halo_mode())
     throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
@@ -165,32 +165,70 @@ constexpr double kRmsDisplacementFactor = 0.25;
 // species s, dt <= C a^2 d_s / v'_rms,s with d_s = (m_min,s / (Omega_s rho_crit0))^(1/3) the
 // mean spacing of its lightest particles, so that no species moves, on average, more than a
 // quarter of its spacing in a step. Recomputed at each recut, as GADGET does at each domain
-// decomposition, from every particle (a comoving run has gravity, so every rank holds them all).
+// decomposition, from every particle, summed as one rank sums them (sums_over_leaves).
 void Engine::set_displacement_limits() {
   const cosmology::CosmologyParams& c = config_.comoving.cosmology;
   const double rho_crit = 3.0 * background_->hubble0() * background_->hubble0() /
                           (8.0 * std::numbers::pi * config_.gravity.G);
   const double a = comoving_->scale_factor(static_cast<double>(ti_current_));
-  auto limit = [&](std::size_t n, auto&& mass, auto&& velocity, double omega) {
-    double m_min = std::numeric_limits<double>::infinity(), v2 = 0.0;
-    std::size_t count = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (!(mass(i) > 0.0)) continue;
-      m_min = std::min(m_min, mass(i));
-      v2 += dot(velocity(i), velocity(i));
-      ++count;
-    }
-    if (count == 0 || !(v2 > 0.0) || !(omega > 0.0)) return std::numeric_limits<double>::infinity();
+  // Per species: the sum of v'^2 and the count of particles with mass (the dark matter of the
+  // high-resolution species only), and the smallest mass.
+  constexpr double kNone = std::numeric_limits<double>::infinity();
+  double m_gas = kNone, m_dm = kNone;
+  auto dm_mass = [&](std::size_t i) { return dm_.species[i] == Species::DarkMatter ? dm_.mass[i] : 0.0; };
+  const std::vector<double> sums = sums_over_leaves(
+      4,
+      [&](std::size_t i, double* out) {
+        if (!(gas_.mass[i] > 0.0)) return;
+        m_gas = std::min(m_gas, gas_.mass[i]);
+        out[0] += dot(gas_.v_full[i], gas_.v_full[i]);
+        out[1] += 1.0;
+      },
+      [&](std::size_t i, double* out) {
+        if (!(dm_mass(i) > 0.0)) return;
+        m_dm = std::min(m_dm, dm_mass(i));
+        out[2] += dot(dm_.v_full[i], dm_.v_full[i]);
+        out[3] += 1.0;
+      });
+  if (layout_.halo_mode())
+    for (double* m : {&m_gas, &m_dm})
+      for (double theirs : from_every_rank(*m)) *m = std::min(*m, theirs);
+  auto limit = [&](double v2, double count, double m_min, double omega) {
+    if (count == 0.0 || !(v2 > 0.0) || !(omega > 0.0)) return kNone;
     const double spacing = std::cbrt(m_min / (omega * rho_crit));
-    return kRmsDisplacementFactor * a * a * spacing / std::sqrt(v2 / static_cast<double>(count));
+    return kRmsDisplacementFactor * a * a * spacing / std::sqrt(v2 / count);
   };
-  const double omega_dm = gas_.size() > 0 ? c.omega_m - c.omega_b : c.omega_m;
-  const double omega_gas = dm_.size() > 0 ? c.omega_b : c.omega_m;
-  ctx_->dt_rms_gas = limit(
-      gas_.size(), [&](std::size_t i) { return gas_.mass[i]; }, [&](std::size_t i) { return gas_.v_full[i]; }, omega_gas);
-  ctx_->dt_rms_dark_matter = limit(
-      dm_.size(), [&](std::size_t i) { return dm_.species[i] == Species::DarkMatter ? dm_.mass[i] : 0.0; },
-      [&](std::size_t i) { return dm_.v_full[i]; }, omega_dm);
+  const double omega_dm = gas_count() > 0 ? c.omega_m - c.omega_b : c.omega_m;
+  const double omega_gas = collisionless_count() > 0 ? c.omega_b : c.omega_m;
+  ctx_->dt_rms_gas = limit(sums[0], sums[1], m_gas, omega_gas);
+  ctx_->dt_rms_dark_matter = limit(sums[2], sums[3], m_dm, omega_dm);
+}
+
+template <class GasTerms, class CollisionlessTerms>
+std::vector<double> Engine::sums_over_leaves(std::size_t terms, GasTerms&& gas_terms,
+                                             CollisionlessTerms&& collisionless_terms) const {
+  const std::vector<int>& leaves = space_.leaves();
+  std::vector<double> partial(leaves.size() * terms, 0.0);
+  for (std::size_t l = 0; l < leaves.size(); ++l) {
+    const int c = leaves[l];
+    if (!holds_collisionless(c)) continue;  // halo mode: the owner sums a leaf
+    const Cell& cell = space_.cell(c);
+    double* out = partial.data() + l * terms;
+    for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) gas_terms(i, out);
+    for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) collisionless_terms(i, out);
+  }
+  if (layout_.halo_mode()) {
+    const auto all = ranks_->allgather_values(std::span<const double>(partial), "sums over leaves");
+    for (std::size_t l = 0; l < leaves.size(); ++l) {
+      const auto& owners = all[static_cast<std::size_t>(layout_.owner(leaves[l]))];
+      std::copy_n(owners.begin() + static_cast<std::ptrdiff_t>(l * terms), terms,
+                  partial.begin() + static_cast<std::ptrdiff_t>(l * terms));
+    }
+  }
+  std::vector<double> total(terms, 0.0);
+  for (std::size_t l = 0; l < leaves.size(); ++l)
+    for (std::size_t k = 0; k < terms; ++k) total[k] += partial[l * terms + k];
+  return total;
 }
 
 // GADGET-2's separate long-range step (docs/physics.md §11, "The mesh step"): the mesh force is
@@ -207,10 +245,10 @@ void Engine::plan_mesh_step() {
     m.predict_kick = comoving_->gravity_kick(m.midpoint(), now);
     return;
   }
-  double v2 = 0.0;
-  for (const Vec3& v : gas_.v_full) v2 += dot(v, v);
-  for (const Vec3& v : dm_.v_full) v2 += dot(v, v);
-  const double n = static_cast<double>(gas_.size() + dm_.size());
+  const double v2 = sums_over_leaves(
+      1, [&](std::size_t i, double* out) { out[0] += dot(gas_.v_full[i], gas_.v_full[i]); },
+      [&](std::size_t i, double* out) { out[0] += dot(dm_.v_full[i], dm_.v_full[i]); })[0];
+  const double n = static_cast<double>(gas_count() + collisionless_count());
   const double a = comoving_->scale_factor(now);
   const double v_rms = n > 0.0 ? std::sqrt(v2 / n) : 0.0;
   const double dt = v_rms > 0.0 ? kRmsDisplacementFactor * a * a * ctx_->long_range->mesh.split().r_s / v_rms
@@ -244,7 +282,7 @@ void Engine::setup_periodic_gravity() {
     throw InputError(fmt::format("gravity in a periodic box needs a cubic box (the TreePM mesh is a cube); "
                                  "/Header/BoxSize is ({}, {}, {})",
                                  box.x, box.y, box.z));
-  const int cells = gravity::LongRangeForce::choose_cells(config_.gravity.mesh_cells, gas_.size() + dm_.size());
+  const int cells = gravity::LongRangeForce::choose_cells(config_.gravity.mesh_cells, gas_total_ + dm_total_);
   const double r_s = config_.gravity.split_cells * box.x / cells;
   if (!(gravity::GravitySplit{r_s}.cutoff_radius() < 0.5 * box.x))
     throw InputError(fmt::format("gravity.split_cells = {} with {} mesh cells puts the short-range cut-off (4.5 r_s = "
@@ -369,7 +407,6 @@ void Engine::rebuild() {
   } else {
     space_.recut(gas_, dm_, for_each);
   }
-  if (comoving_) set_displacement_limits();
   ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
   if (ranks_ && !layout_.halo_mode()) layout_.assign_owners(space_, measured, steps_);
@@ -411,6 +448,8 @@ void Engine::rebuild() {
     hold_leaves();
     recut_bytes_ += ranks_->traffic().bytes - bytes_before;
   }
+  // (In halo mode, once each leaf's particles are in place.)
+  if (comoving_) set_displacement_limits();
   if (ctx_->tree_messages) {
     // Across ranks the tree's build is a collective: on this thread, after the lists', and in
     // halo mode after the holders' copies, which put each leaf's particles in place.

@@ -243,6 +243,12 @@ class Engine {
   void remove_dissolved();      // gas marked dissolved (mass 0) leaves the arrays
   // Each module's task types, in the order the modules run; across ranks the exchanges too.
   void set_displacement_limits();
+  // Per term k < terms, the sum over every particle of the run of what gas_terms(i, out) and
+  // collisionless_terms(i, out) add to out[k], as one rank sums it whatever the ranks: per leaf
+  // (its gas, then its collisionless particles), the leaves' sums in the order of
+  // space().leaves(); in halo mode each leaf is summed by its owner.
+  template <class GasTerms, class CollisionlessTerms>
+  std::vector<double> sums_over_leaves(std::size_t terms, GasTerms&& gas_terms, CollisionlessTerms&& collisionless_terms) const;
   // Comoving TreePM: at ti_current_, starts a mesh step if one is due (and the first), and
   // sets the mesh's kick factors for this step (StepContext::MeshStep).
   void plan_mesh_step();

@@ -527,9 +527,13 @@ void Engine::send_in_rounds(Store& store, const std::vector<std::vector<std::siz
 std::vector<int> Engine::leaves_in_run_order() const {
   // Leaves are numbered by the depth-first walk of each top cell in turn after all the top
   // cells, so a top cell that is itself a leaf comes before split ones: sort by the run's order.
+  // Where the gas and the collisionless particles start both grow along it, and no leaf is
+  // empty, so the pair orders every two leaves (a leaf without gas shares its start with the
+  // next).
   std::vector<int> leaves = space_.leaves();
   std::sort(leaves.begin(), leaves.end(), [&](int a, int b) {
-    return run_first_[static_cast<std::size_t>(a)] < run_first_[static_cast<std::size_t>(b)];
+    const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
+    return std::pair{run_first_[ua], run_dm_first_[ua]} < std::pair{run_first_[ub], run_dm_first_[ub]};
   });
   return leaves;
 }

@@ -82,10 +82,9 @@ struct RunConfig {
   Units physical_units() const;
   // Across MPI ranks, whether each rank holds only its own particles and their neighbours
   // (halo mode): runs without star formation, whose spawning and feedback change particles
-  // anywhere, and without the periodic mesh, which is fed every particle (gravity with open
-  // boundaries assembles each rank's tree from the others' parts). Such a run reads its gas in
-  // shares; one with collisionless particles keeps every particle everywhere after all.
-  bool ranks_hold_shares() const { return !star_formation.enabled && !(gravity.enabled && space.periodic); }
+  // anywhere (gravity assembles each rank's tree from the others' parts, and the periodic mesh
+  // is fed each rank's own particles). Such a run reads its gas in shares.
+  bool ranks_hold_shares() const { return !star_formation.enabled; }
 
   // Reads and cross-checks the parameters (the start time is run.t_begin, given or default).
   static RunConfig from(const ParameterFile& p);

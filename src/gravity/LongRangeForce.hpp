@@ -10,8 +10,9 @@
 
 namespace fountain::gravity {
 
-// Per tree source (gas first, then collisionless particles, as build_tree numbers them), at
-// the positions of the step's last mesh computation.
+// Per tree source (gas first, then collisionless particles, as build_tree numbers them; in
+// halo mode this rank's own leaves' particles), at the positions of the step's last mesh
+// computation.
 struct LongRangeForce {
   PeriodicMesh mesh;
   std::vector<Vec3> acceleration;

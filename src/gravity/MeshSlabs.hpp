@@ -5,6 +5,7 @@
 #include <memory>
 #include <mutex>
 #include <span>
+#include <vector>
 
 namespace fountain::gravity {
 
@@ -50,6 +51,10 @@ class MeshSlabs {
   // left +0.0 (all bits clear) by the others, so the result is that rank's value exactly.
   void combine_bits(std::span<double> values) const;
   std::int64_t sum(std::int64_t local) const;
+  double min(double local) const;
+  double max(double local) const;
+  // Bytes to each rank (to[q], itself included), and what each rank sent this one. Collective.
+  std::vector<std::vector<char>> exchange(const std::vector<std::vector<char>>& to) const;
 
  private:
   MeshSlabs() = default;

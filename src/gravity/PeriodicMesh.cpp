@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <mutex>
 #include <numbers>
 #include <stdexcept>
@@ -150,21 +152,31 @@ std::size_t PeriodicMesh::bytes() const {
 // cannot overflow (N m_max / m_min < 2^22), coarser otherwise. The unit depends only on the
 // set, and integer sums do not depend on their order. Each rank adds only the nodes of its
 // own planes, from every particle whose cloud reaches them.
-void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each) {
-  double m_min = 0.0, m_max = 0.0;
+PeriodicMesh::MassRange PeriodicMesh::mass_range(std::span<const double> masses) {
+  MassRange r;
+  r.count = static_cast<std::int64_t>(masses.size());
   for (std::size_t p = 0; p < masses.size(); ++p) {
     const double m = masses[p];
     if (!(m >= 0.0) || !std::isfinite(m))
       throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a negative or non-finite mass");
-    if (m > 0.0) m_min = m_min == 0.0 ? m : std::min(m_min, m);
-    m_max = std::max(m_max, m);
+    if (m > 0.0) r.min = r.min == 0.0 ? m : std::min(r.min, m);
+    r.max = std::max(r.max, m);
   }
+  return r;
+}
+
+void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each) {
+  deposit(positions, masses, mass_range(masses), for_each);
+}
+
+void PeriodicMesh::deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
+                           const ForEach& for_each) {
   std::fill(fixed_.begin(), fixed_.end(), 0);
-  if (m_max == 0.0) return;
-  const double bound = static_cast<double>(masses.size()) * (m_max / m_min);
+  if (range.max == 0.0) return;
+  const double bound = static_cast<double>(range.count) * (range.max / range.min);
   const int bits = std::min(40, 61 - static_cast<int>(std::ceil(std::log2(bound))));
   if (bits < 0) throw std::invalid_argument("PeriodicMesh: the masses span too wide a range for the fixed-point sum");
-  fixed_unit_ = std::ldexp(m_min, -bits);
+  fixed_unit_ = std::ldexp(range.min, -bits);
   const double unit_inv = 1.0 / fixed_unit_;
   const double cell_inv = n_ / box_;
   const int n = n_, x0 = x0_, nx = nx_;
@@ -297,7 +309,98 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
     throw std::invalid_argument("PeriodicMesh::compute: positions, masses and outputs differ in length");
   assign(positions, masses, for_each);
   solve(for_each);
+  interpolate(positions, masses, acceleration, potential, for_each);
+  if (slabs_) {
+    // Every particle was interpolated by one rank; the others left it +0.0.
+    slabs_->combine_bits(std::span<double>(reinterpret_cast<double*>(acceleration.data()), 3 * count));
+    slabs_->combine_bits(potential);
+  }
+}
 
+void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<const double> masses,
+                                 std::span<Vec3> acceleration, std::span<double> potential, const ForEach& for_each) {
+  const std::size_t count = positions.size();
+  if (masses.size() != count || acceleration.size() != count || potential.size() != count)
+    throw std::invalid_argument("PeriodicMesh::compute_owned: positions, masses and outputs differ in length");
+  if (!slabs_) {
+    compute(positions, masses, acceleration, potential, for_each);
+    return;
+  }
+  // The fixed-point unit from every rank's masses, as one rank would find it from all of them.
+  MassRange range = mass_range(masses);
+  const double lightest = slabs_->min(range.min > 0.0 ? range.min : std::numeric_limits<double>::infinity());
+  range.min = std::isfinite(lightest) ? lightest : 0.0;
+  range.max = slabs_->max(range.max);
+  range.count = slabs_->sum(range.count);
+  // Each particle goes to the ranks of the planes its cloud touches (its lower plane's and the
+  // next one's); the rank of its lower plane interpolates it and sends its force back.
+  struct Sent {
+    Vec3 x;
+    double m;
+    std::uint64_t p;
+  };
+  struct Back {
+    std::uint64_t p;
+    Vec3 acceleration;
+    double potential;
+  };
+  const int n = n_;
+  const double cell_inv = n / box_;
+  const auto ranks = static_cast<std::size_t>(slabs_->ranks());
+  std::vector<std::vector<char>> to(ranks);
+  auto put = [](std::vector<char>& buffer, const auto& record) {
+    const auto* bytes = reinterpret_cast<const char*>(&record);
+    buffer.insert(buffer.end(), bytes, bytes + sizeof record);
+  };
+  for (std::size_t p = 0; p < count; ++p) {
+    const Vec3& x = positions[p];
+    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+      throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
+    const int lo = cloud_of(x, box_, cell_inv, n).w[0].lo;
+    const int q_lo = slabs_->owner_of(lo), q_hi = slabs_->owner_of((lo + 1) % n);
+    put(to[static_cast<std::size_t>(q_lo)], Sent{x, masses[p], p});
+    if (q_hi != q_lo) put(to[static_cast<std::size_t>(q_hi)], Sent{x, masses[p], p});
+  }
+  const std::vector<std::vector<char>> from = slabs_->exchange(to);
+  std::vector<Vec3> x_in;
+  std::vector<double> m_in;
+  std::vector<std::pair<std::size_t, std::uint64_t>> origin;  // (sender, its index)
+  for (std::size_t q = 0; q < ranks; ++q)
+    for (std::size_t at = 0; at + sizeof(Sent) <= from[q].size(); at += sizeof(Sent)) {
+      Sent s;
+      std::memcpy(&s, from[q].data() + at, sizeof s);
+      x_in.push_back(s.x);
+      m_in.push_back(s.m);
+      origin.emplace_back(q, s.p);
+    }
+  deposit(x_in, m_in, range, for_each);
+  solve(for_each);
+  std::vector<Vec3> a_in(x_in.size());
+  std::vector<double> phi_in(x_in.size());
+  interpolate(x_in, m_in, a_in, phi_in, for_each);
+  std::vector<std::vector<char>> back(ranks);
+  for (std::size_t k = 0; k < x_in.size(); ++k) {
+    const int lo = cloud_of(x_in[k], box_, cell_inv, n).w[0].lo - x0_;
+    if (lo >= 0 && lo < nx_) put(back[origin[k].first], Back{origin[k].second, a_in[k], phi_in[k]});
+  }
+  std::size_t returned = 0;
+  for (const std::vector<char>& in : slabs_->exchange(back))
+    for (std::size_t at = 0; at + sizeof(Back) <= in.size(); at += sizeof(Back)) {
+      Back b;
+      std::memcpy(&b, in.data() + at, sizeof b);
+      if (b.p >= count) throw std::logic_error("PeriodicMesh::compute_owned: a force came back for no particle");
+      acceleration[b.p] = b.acceleration;
+      potential[b.p] = b.potential;
+      ++returned;
+    }
+  if (returned != count)
+    throw std::logic_error("PeriodicMesh::compute_owned: " + std::to_string(returned) + " forces came back for " +
+                           std::to_string(count) + " particles");
+}
+
+void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const double> masses,
+                               std::span<Vec3> acceleration, std::span<double> potential, const ForEach& for_each) {
+  const std::size_t count = positions.size();
   std::int64_t assigned = 0;
   for (const std::int64_t f : fixed_) assigned += f;
   if (slabs_) assigned = slabs_->sum(assigned);
@@ -346,11 +449,6 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
     acceleration[p] = acc;
     potential[p] = pot;
   });
-  if (slabs_) {
-    // Every particle was interpolated by one rank; the others left it +0.0.
-    slabs_->combine_bits(std::span<double>(reinterpret_cast<double*>(acceleration.data()), 3 * count));
-    slabs_->combine_bits(potential);
-  }
 }
 
 }  // namespace fountain::gravity

@@ -49,6 +49,12 @@ class PeriodicMesh {
   // the mesh).
   void compute(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
                std::span<double> potential, const ForEach& for_each = {});
+  // The same where each rank passes only its own particles and gets their forces: each goes
+  // to the ranks whose planes its cloud reaches, and comes back from the one that interpolates
+  // it. The mesh and every force have compute()'s bits over all ranks' particles together.
+  // Collective.
+  void compute_owned(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
+                     std::span<double> potential, const ForEach& for_each = {});
 
   // The assigned mass per node of this rank's planes in the last compute, in the fixed-point
   // units (node index ((i - first_plane()) N + j) N + k for node position (i, j, k) Delta):
@@ -65,7 +71,18 @@ class PeriodicMesh {
   double box() const { return box_; }
 
  private:
+  // The masses' smallest positive and largest value and their count: the fixed-point unit.
+  struct MassRange {
+    double min = 0.0, max = 0.0;
+    std::int64_t count = 0;
+  };
+  static MassRange mass_range(std::span<const double> masses);
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
+  void deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
+               const ForEach& for_each);
+  // The forces at `positions` whose lower plane is this rank's (+0.0 for the others).
+  void interpolate(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
+                   std::span<double> potential, const ForEach& for_each);
   void solve(const ForEach& for_each);
   void transpose(bool to_columns, const ForEach& for_each);
   std::vector<double> green_function() const;

@@ -58,6 +58,9 @@ inline constexpr Messages halo_gravity = 1u << 6;
 // A particle sent whole to another rank (pack_particles): to its top cell's owner at a
 // recut, or to a holder of its leaf that had no copy of it.
 inline constexpr Messages migration = 1u << 7;
+// Halo mode's changed gas, fourth part, in periodic runs: the mesh's acceleration, which a
+// holder's own drift reads (the predicted velocity within a mesh step).
+inline constexpr Messages halo_mesh = 1u << 8;
 }  // namespace message
 
 struct FieldInfo {

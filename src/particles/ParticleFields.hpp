@@ -160,7 +160,7 @@ inline constexpr auto kGasFields = [] {
                           .snapshot = always, .messages = kStepped}),
     field(&G::a_mesh, {.key = "a_mesh", .name = "MeshAcceleration", .units = kAcceleration,
                        .description = "The periodic mesh's (long-range) part of GravAcceleration, from the start of the mesh step",
-                       .messages = kStepped}),
+                       .messages = kStepped | halo_mesh}),
     field(&G::potential_mesh, {.key = "potential_mesh", .name = "MeshPotential", .units = kPotential,
                                .description = "The periodic mesh's part of Potential, from the start of the mesh step",
                                .messages = kStepped}),

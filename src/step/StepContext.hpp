@@ -74,7 +74,7 @@ struct StepContext {
   const std::size_t* gas_total = nullptr;
   // Halo mode: a leaf's collisionless particles are in the arrays of its owner only (a holder
   // drifts the leaf's gas, not them).
-  bool collisionless_owned_only = false;
+  bool halo_mode = false;
   // What this graph run's tree tasks do (gravity::plan_tree_update, before the run).
   enum class TreeUpdate { keep, refit, build };
   TreeUpdate tree_update = TreeUpdate::build;

@@ -198,7 +198,7 @@ void drift(StepContext& ctx, int c, ForceInputs force_inputs) {
     if (prepare && (!ghost_prepares || !ctx.is_active(i))) hydro::prepare_force(gas, i, ctx.hydro, ctx.expansion.hubble_flow);
     h_max = std::max(h_max, gas.h[i]);
   }
-  if (dt != 0.0 && (!ctx.collisionless_owned_only || ctx.owns_leaf(c))) {
+  if (dt != 0.0 && (!ctx.halo_mode || ctx.owns_leaf(c))) {
     CollisionlessParticles& dm = ctx.dm;
     for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) {
       dm.x[i] += dm.v_full[i] * dt;
