@@ -433,7 +433,19 @@ with h5py.File('out/snapshot_0003.hdf5', 'r') as f:
         last_snapshot=snapshot_0003 stop_half_way "$(grep -c '^step' runA.txt)" "$bin" run paramsB.yml
         "$bin" run paramsB.yml --restart > restart.txt 2>&1 || { cat restart.txt; fail "restart failed"; }
         head -1 restart.txt
-        for k in 1 2 3; do "$python" "$root/tests/compare_snapshots.py" "outA/snapshot_000$k.hdf5" "outB/snapshot_000$k.hdf5"; done ;;
+        for k in 1 2 3; do "$python" "$root/tests/compare_snapshots.py" "outA/snapshot_000$k.hdf5" "outB/snapshot_000$k.hdf5"; done
+        # Across ranks (halo mode): a 2-rank set, each piece its own cells' gas and dark matter
+        # of both masses with their places, continued on 3 ranks.
+        cparams outC "restart:
+  every_steps: 8"
+        half=$(( $(grep -c '^step' runA.txt) / 2 ))
+        ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 2 "$bin" run params.yml -q -t 1 \
+          --abandon-after-steps "$half" > killedC.txt 2>&1 || { cat killedC.txt; fail "2-rank run to be stopped"; }
+        ls outC/restart_*_rank1.hdf5 > /dev/null || fail "the 2-rank run wrote no restart set"
+        ASAN_OPTIONS=detect_leaks=0 mpirun --allow-run-as-root --oversubscribe -np 3 "$bin" run params.yml -q -t 1 --restart \
+          > restartC.txt 2>&1 || { cat restartC.txt; fail "restart on 3 ranks"; }
+        grep -q "^halo mode: rank 0 kept" restartC.txt || { cat restartC.txt; fail "the 3-rank run was not in halo mode"; }
+        for k in 1 2 3; do "$python" "$root/tests/compare_snapshots.py" "outA/snapshot_000$k.hdf5" "outC/snapshot_000$k.hdf5"; done ;;
     esac ;;
   comoving_galaxy_bitwise|comoving_galaxy_restart)
     # A small cosmological box (2 x 16^3 in 2 Mpc/h, z = 49) with everything a galaxy run

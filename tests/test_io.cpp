@@ -409,10 +409,17 @@ TEST_F(IoTest, SharesNameTheirBadParticlesAndTheFirstFindsRepeatedIds) {
   const std::string repeated = share_error(0, 3);
   EXPECT_TRUE(contains(repeated, "particle ID " + std::to_string(h.ids[1]) + " appears more than once")) << repeated;
   EXPECT_EQ(share_error(2, 3), "");
+  // A cosmological file is read in shares alike: the first share still finds the repeat, the
+  // second reads its rows.
   fountain::io::IcReadOptions cosmological;
   cosmological.cosmological = true;
   cosmological.share_ranks = 2;
-  EXPECT_THROW(fountain::io::read_initial_conditions(path, cosmological), std::logic_error);
+  EXPECT_THROW(fountain::io::read_initial_conditions(path, cosmological), InputError);
+  cosmological.share_rank = 1;
+  const auto second = fountain::io::read_initial_conditions(path, cosmological);
+  EXPECT_EQ(second.gas_first, second.gas_total / 2);
+  EXPECT_EQ(second.gas.size(), second.gas_total - second.gas_total / 2);
+  EXPECT_EQ(second.gas.id[0], h.ids[second.gas_first]);
 }
 
 // Single-precision floats, 32-bit IDs and a 3-vector BoxSize, written with the raw C API.
