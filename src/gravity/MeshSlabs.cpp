@@ -158,39 +158,35 @@ double MeshSlabs::max(double local) const {
   return out;
 }
 
-std::vector<std::vector<char>> MeshSlabs::exchange(const std::vector<std::vector<char>>& to) const {
+std::vector<char> MeshSlabs::exchange(std::vector<char>&& bytes, std::vector<std::size_t>& counts) const {
   const auto n = static_cast<std::size_t>(ranks_);
-  if (to.size() != n) throw std::invalid_argument("MeshSlabs::exchange: one buffer per rank");
-  // Byte counts go as MPI's int: a message to one rank stays below 2 GiB (a particle's record
-  // is a few tens of bytes).
+  if (counts.size() != n) throw std::invalid_argument("MeshSlabs::exchange: one count per rank");
+  // Byte counts go as MPI's int: an exchange stays below 2 GiB a rank (a particle's record is
+  // a few tens of bytes).
   std::vector<int> send_counts(n), recv_counts(n), send_at(n), recv_at(n);
   std::size_t total = 0;
   for (std::size_t q = 0; q < n; ++q) {
-    if (to[q].size() > static_cast<std::size_t>(INT_MAX) || total + to[q].size() > static_cast<std::size_t>(INT_MAX))
-      throw std::runtime_error("MeshSlabs::exchange: more than 2 GiB to send");
-    send_counts[q] = static_cast<int>(to[q].size());
     send_at[q] = static_cast<int>(total);
-    total += to[q].size();
+    total += counts[q];
+    if (total > static_cast<std::size_t>(INT_MAX)) throw std::runtime_error("MeshSlabs::exchange: more than 2 GiB to send");
+    send_counts[q] = static_cast<int>(counts[q]);
   }
-  std::vector<char> out(total);
-  for (std::size_t q = 0; q < n; ++q)
-    if (!to[q].empty()) std::memcpy(out.data() + send_at[q], to[q].data(), to[q].size());
+  if (total != bytes.size()) throw std::invalid_argument("MeshSlabs::exchange: counts and bytes disagree");
   check(MPI_Alltoall(send_counts.data(), 1, MPI_INT, recv_counts.data(), 1, MPI_INT, impl_->comm),
         "MPI_Alltoall (mesh message sizes)");
   std::size_t in_total = 0;
   for (std::size_t q = 0; q < n; ++q) {
     recv_at[q] = static_cast<int>(in_total);
     in_total += static_cast<std::size_t>(recv_counts[q]);
+    counts[q] = static_cast<std::size_t>(recv_counts[q]);
   }
   if (in_total > static_cast<std::size_t>(INT_MAX)) throw std::runtime_error("MeshSlabs::exchange: more than 2 GiB to receive");
   std::vector<char> in(in_total);
-  check(MPI_Alltoallv(out.data(), send_counts.data(), send_at.data(), MPI_BYTE, in.data(), recv_counts.data(),
+  check(MPI_Alltoallv(bytes.data(), send_counts.data(), send_at.data(), MPI_BYTE, in.data(), recv_counts.data(),
                       recv_at.data(), MPI_BYTE, impl_->comm),
         "MPI_Alltoallv (mesh particles)");
-  std::vector<std::vector<char>> from(n);
-  for (std::size_t q = 0; q < n; ++q)
-    from[q].assign(in.begin() + recv_at[q], in.begin() + recv_at[q] + recv_counts[q]);
-  return from;
+  std::vector<char>().swap(bytes);
+  return in;
 }
 
 #else  // a build without MPI runs alone
@@ -206,7 +202,9 @@ void MeshSlabs::combine_bits(std::span<double>) const {}
 std::int64_t MeshSlabs::sum(std::int64_t local) const { return local; }
 double MeshSlabs::min(double local) const { return local; }
 double MeshSlabs::max(double local) const { return local; }
-std::vector<std::vector<char>> MeshSlabs::exchange(const std::vector<std::vector<char>>& to) const { return to; }
+std::vector<char> MeshSlabs::exchange(std::vector<char>&& bytes, std::vector<std::size_t>&) const {
+  return std::move(bytes);
+}
 
 #endif
 

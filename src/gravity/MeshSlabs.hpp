@@ -53,8 +53,10 @@ class MeshSlabs {
   std::int64_t sum(std::int64_t local) const;
   double min(double local) const;
   double max(double local) const;
-  // Bytes to each rank (to[q], itself included), and what each rank sent this one. Collective.
-  std::vector<std::vector<char>> exchange(const std::vector<std::vector<char>>& to) const;
+  // Sends `bytes` (to each rank q in turn, itself included, counts[q] bytes) and returns what
+  // every rank sent this one, laid end to end in rank order, with their byte counts in
+  // `counts`. The send buffer is freed once sent: an exchange holds at most both. Collective.
+  std::vector<char> exchange(std::vector<char>&& bytes, std::vector<std::size_t>& counts) const;
 
  private:
   MeshSlabs() = default;

@@ -347,55 +347,90 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
   const int n = n_;
   const double cell_inv = n / box_;
   const auto ranks = static_cast<std::size_t>(slabs_->ranks());
-  std::vector<std::vector<char>> to(ranks);
-  auto put = [](std::vector<char>& buffer, const auto& record) {
-    const auto* bytes = reinterpret_cast<const char*>(&record);
-    buffer.insert(buffer.end(), bytes, bytes + sizeof record);
-  };
+  // Buffers of exactly the records they carry, each freed once read: the exchange's memory
+  // stays a few tens of bytes a particle beside the mesh.
+  auto lower_plane = [&](const Vec3& x) { return cloud_of(x, box_, cell_inv, n).w[0].lo; };
+  std::vector<std::size_t> counts(ranks, 0);
   for (std::size_t p = 0; p < count; ++p) {
     const Vec3& x = positions[p];
     if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
       throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
-    const int lo = cloud_of(x, box_, cell_inv, n).w[0].lo;
+    const int lo = lower_plane(x);
     const int q_lo = slabs_->owner_of(lo), q_hi = slabs_->owner_of((lo + 1) % n);
-    put(to[static_cast<std::size_t>(q_lo)], Sent{x, masses[p], p});
-    if (q_hi != q_lo) put(to[static_cast<std::size_t>(q_hi)], Sent{x, masses[p], p});
+    ++counts[static_cast<std::size_t>(q_lo)];
+    if (q_hi != q_lo) ++counts[static_cast<std::size_t>(q_hi)];
   }
-  const std::vector<std::vector<char>> from = slabs_->exchange(to);
+  std::vector<std::size_t> at(ranks, 0);
+  for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1] * sizeof(Sent);
+  std::vector<char> send((at.back() + counts.back() * sizeof(Sent)));
+  for (std::size_t p = 0; p < count; ++p) {
+    const int lo = lower_plane(positions[p]);
+    const auto q_lo = static_cast<std::size_t>(slabs_->owner_of(lo)), q_hi = static_cast<std::size_t>(slabs_->owner_of((lo + 1) % n));
+    const Sent record{positions[p], masses[p], p};
+    std::memcpy(send.data() + at[q_lo], &record, sizeof record);
+    at[q_lo] += sizeof record;
+    if (q_hi != q_lo) {
+      std::memcpy(send.data() + at[q_hi], &record, sizeof record);
+      at[q_hi] += sizeof record;
+    }
+  }
+  for (std::size_t& c : counts) c *= sizeof(Sent);
   std::vector<Vec3> x_in;
   std::vector<double> m_in;
-  std::vector<std::pair<std::size_t, std::uint64_t>> origin;  // (sender, its index)
-  for (std::size_t q = 0; q < ranks; ++q)
-    for (std::size_t at = 0; at + sizeof(Sent) <= from[q].size(); at += sizeof(Sent)) {
-      Sent s;
-      std::memcpy(&s, from[q].data() + at, sizeof s);
-      x_in.push_back(s.x);
-      m_in.push_back(s.m);
-      origin.emplace_back(q, s.p);
-    }
+  std::vector<std::pair<std::uint32_t, std::uint64_t>> origin;  // (sender, its index)
+  {
+    const std::vector<char> in = slabs_->exchange(std::move(send), counts);
+    const std::size_t records = in.size() / sizeof(Sent);
+    x_in.resize(records);
+    m_in.resize(records);
+    origin.resize(records);
+    std::size_t k = 0;
+    for (std::size_t q = 0; q < ranks; ++q)
+      for (std::size_t b = 0; b < counts[q]; b += sizeof(Sent), ++k) {
+        Sent s;
+        std::memcpy(&s, in.data() + (k * sizeof(Sent)), sizeof s);
+        x_in[k] = s.x;
+        m_in[k] = s.m;
+        origin[k] = {static_cast<std::uint32_t>(q), s.p};
+      }
+  }
   deposit(x_in, m_in, range, for_each);
   solve(for_each);
   std::vector<Vec3> a_in(x_in.size());
   std::vector<double> phi_in(x_in.size());
   interpolate(x_in, m_in, a_in, phi_in, for_each);
-  std::vector<std::vector<char>> back(ranks);
+  // Back to each sender, the forces of the particles whose lower plane is here.
+  std::vector<char> interpolated(x_in.size());
+  std::fill(counts.begin(), counts.end(), 0);
   for (std::size_t k = 0; k < x_in.size(); ++k) {
-    const int lo = cloud_of(x_in[k], box_, cell_inv, n).w[0].lo - x0_;
-    if (lo >= 0 && lo < nx_) put(back[origin[k].first], Back{origin[k].second, a_in[k], phi_in[k]});
+    const int lo = lower_plane(x_in[k]) - x0_;
+    interpolated[k] = lo >= 0 && lo < nx_;
+    if (interpolated[k]) counts[origin[k].first] += sizeof(Back);
   }
-  std::size_t returned = 0;
-  for (const std::vector<char>& in : slabs_->exchange(back))
-    for (std::size_t at = 0; at + sizeof(Back) <= in.size(); at += sizeof(Back)) {
-      Back b;
-      std::memcpy(&b, in.data() + at, sizeof b);
-      if (b.p >= count) throw std::logic_error("PeriodicMesh::compute_owned: a force came back for no particle");
-      acceleration[b.p] = b.acceleration;
-      potential[b.p] = b.potential;
-      ++returned;
-    }
-  if (returned != count)
-    throw std::logic_error("PeriodicMesh::compute_owned: " + std::to_string(returned) + " forces came back for " +
-                           std::to_string(count) + " particles");
+  std::vector<Vec3>().swap(x_in);
+  std::vector<double>().swap(m_in);
+  at[0] = 0;
+  for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1];
+  std::vector<char> back(at.back() + counts.back());
+  for (std::size_t k = 0; k < a_in.size(); ++k) {
+    if (!interpolated[k]) continue;
+    const Back record{origin[k].second, a_in[k], phi_in[k]};
+    std::memcpy(back.data() + at[origin[k].first], &record, sizeof record);
+    at[origin[k].first] += sizeof record;
+  }
+  std::vector<Vec3>().swap(a_in);
+  std::vector<double>().swap(phi_in);
+  const std::vector<char> in = slabs_->exchange(std::move(back), counts);
+  if (in.size() != count * sizeof(Back))
+    throw std::logic_error("PeriodicMesh::compute_owned: " + std::to_string(in.size() / sizeof(Back)) +
+                           " forces came back for " + std::to_string(count) + " particles");
+  for (std::size_t b = 0; b < in.size(); b += sizeof(Back)) {
+    Back r;
+    std::memcpy(&r, in.data() + b, sizeof r);
+    if (r.p >= count) throw std::logic_error("PeriodicMesh::compute_owned: a force came back for no particle");
+    acceleration[r.p] = r.acceleration;
+    potential[r.p] = r.potential;
+  }
 }
 
 void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const double> masses,
