@@ -89,7 +89,7 @@ int run(int argc, char** argv, const tasks::MpiSession& mpi) {
     ic.gas = std::move(file.gas);
     ic.box_size = file.box_size;
     n = file.gas_total;
-    if (mpi.size() > 1) share = Engine::GasShare{file.gas_first, file.gas_total, {}, false, 0, {}};
+    if (mpi.size() > 1) share = Engine::GasShare{file.gas_first, file.gas_total, {}, true, file.dm_total, {}, file.dm_first};
   }
   RunConfig c;
   c.t_end = t_end;

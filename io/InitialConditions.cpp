@@ -57,7 +57,8 @@ void check_shape(const File& file, const Species& sp, const std::string& dataset
 // The ParticleIDs of one type (of `rows` only, with it); an ID that appears twice within the
 // type is an error, checked over every row where `check_all` is set.
 std::vector<std::uint64_t> read_ids(const File& file, const Species& sp, std::uint64_t n,
-                                    const hdf5::RowRange* rows = nullptr, bool check_all = true) {
+                                    const hdf5::RowRange* rows = nullptr, bool check_all = true,
+                                    std::vector<std::uint64_t>* all_ids = nullptr) {
   const std::string dataset = sp.dataset("ParticleIDs");
   if (!file.exists(dataset)) file.fail(dataset, "dataset not found");
   check_shape(file, sp, dataset, n, false);
@@ -71,9 +72,12 @@ std::vector<std::uint64_t> read_ids(const File& file, const Species& sp, std::ui
     if (ids[order[k]] == ids[order[k - 1]])
       file.fail(dataset, fmt::format("particle ID {} appears more than once (entries {} and {}); IDs must be unique",
                                      ids[order[k]], order[k - 1], order[k]));
-  if (rows == nullptr) return ids;
-  return {ids.begin() + static_cast<std::ptrdiff_t>(rows->first),
-          ids.begin() + static_cast<std::ptrdiff_t>(rows->first + rows->count)};
+  std::vector<std::uint64_t> out = rows == nullptr ? ids
+                                                  : std::vector<std::uint64_t>(
+                                                        ids.begin() + static_cast<std::ptrdiff_t>(rows->first),
+                                                        ids.begin() + static_cast<std::ptrdiff_t>(rows->first + rows->count));
+  if (all_ids) *all_ids = std::move(ids);
+  return out;
 }
 
 std::vector<Vec3> read_vectors(const File& file, const Species& sp, const char* name, std::uint64_t n,
@@ -148,20 +152,24 @@ std::uint64_t particle_count(const File& file, const std::vector<std::uint64_t>&
 }
 
 // Reads the collisionless particles of one GADGET type (none when NumPart_ThisFile says 0).
+// With `rows`, of those rows only; IDs are checked for repeats (and handed back whole in
+// `all_ids`) where `check_all` is set.
 CollisionlessParticles read_collisionless(const File& file, const Species& sp, std::uint64_t n,
-                                          const std::vector<double>* mass_table, fountain::Species species) {
+                                          const std::vector<double>* mass_table, fountain::Species species,
+                                          const hdf5::RowRange* rows = nullptr, bool check_all = true,
+                                          std::vector<std::uint64_t>* all_ids = nullptr) {
   CollisionlessParticles dm;
   if (n == 0) return dm;
   if (!file.exists(sp.group))
     file.fail(sp.group, fmt::format("group not found, but /Header/NumPart_ThisFile[{}] announces {} {} particles",
                                     sp.type, n, sp.noun));
-  const std::vector<std::uint64_t> ids = read_ids(file, sp, n);
-  const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates");
-  const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity");
-  const std::vector<double> mass = read_masses(file, sp, n, ids, mass_table);
-  dm.resize(n);  // a_grav, potential, time_bin and ti_begin start at zero
+  const std::vector<std::uint64_t> ids = read_ids(file, sp, n, rows, check_all, all_ids);
+  const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates", rows);
+  const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity", rows);
+  const std::vector<double> mass = read_masses(file, sp, n, ids, mass_table, rows);
+  dm.resize(ids.size());  // a_grav, potential, time_bin and ti_begin start at zero
   dm.id = ids;
-  dm.species.assign(n, species);
+  dm.species.assign(ids.size(), species);
   dm.mass = mass;
   dm.x = x;
   dm.v_full = v;
@@ -186,26 +194,27 @@ void append(CollisionlessParticles& to, const CollisionlessParticles& from) {
 // particle or an earlier collisionless particle also uses. `ids_of(species)` names where the
 // file holds that species' IDs.
 template <class IdsOf>
-void check_ids_across_species(const std::string& path, const GasParticles& gas, const CollisionlessParticles& dm,
+void check_ids_across_species(const std::string& path, const std::vector<std::uint64_t>& gas_id,
+                              const std::vector<std::uint64_t>& dm_id, const std::vector<fountain::Species>& dm_species,
                               IdsOf&& ids_of) {
-  if (dm.size() == 0) return;
-  std::vector<std::uint64_t> gas_ids(gas.id);
+  if (dm_id.empty()) return;
+  std::vector<std::uint64_t> gas_ids(gas_id);
   std::sort(gas_ids.begin(), gas_ids.end());
-  for (std::size_t i = 0; i < dm.size(); ++i)
-    if (std::binary_search(gas_ids.begin(), gas_ids.end(), dm.id[i]))
+  for (std::size_t i = 0; i < dm_id.size(); ++i)
+    if (std::binary_search(gas_ids.begin(), gas_ids.end(), dm_id[i]))
       throw InputError(fmt::format("{}: {}: particle ID {} ({}) is also used by a gas particle; IDs must be unique "
                                    "across gas and dark matter",
-                                   path, ids_of(dm.species[i]), dm.id[i], species_name(dm.species[i])));
-  std::vector<std::size_t> order(dm.size());
+                                   path, ids_of(dm_species[i]), dm_id[i], species_name(dm_species[i])));
+  std::vector<std::size_t> order(dm_id.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::sort(order.begin(), order.end(),
-            [&](std::size_t a, std::size_t b) { return dm.id[a] != dm.id[b] ? dm.id[a] < dm.id[b] : a < b; });
+            [&](std::size_t a, std::size_t b) { return dm_id[a] != dm_id[b] ? dm_id[a] < dm_id[b] : a < b; });
   for (std::size_t k = 1; k < order.size(); ++k)
-    if (dm.id[order[k]] == dm.id[order[k - 1]])
+    if (dm_id[order[k]] == dm_id[order[k - 1]])
       throw InputError(fmt::format("{}: {}: particle ID {} is used by both a {} and a {} particle; IDs must be "
                                    "unique across the particle types",
-                                   path, ids_of(dm.species[order[k]]), dm.id[order[k]],
-                                   species_name(dm.species[order[k - 1]]), species_name(dm.species[order[k]])));
+                                   path, ids_of(dm_species[order[k]]), dm_id[order[k]],
+                                   species_name(dm_species[order[k - 1]]), species_name(dm_species[order[k]])));
 }
 
 // The header's cosmology and the /Units group's unit system, where the file gives them.
@@ -250,7 +259,7 @@ void check_internal_energies(const std::string& where, const std::vector<std::ui
                                      where));
 }
 
-// The gas rows one rank of options.share_ranks reads of a file's n.
+// The rows one rank of options.share_ranks reads of a file's n gas (or collisionless) particles.
 hdf5::RowRange gas_share(std::uint64_t n, const IcReadOptions& options) {
   const auto r = static_cast<std::uint64_t>(options.share_rank), ranks = static_cast<std::uint64_t>(options.share_ranks);
   const std::uint64_t first = n * r / ranks;
@@ -309,14 +318,20 @@ InitialConditions read_gadget_binary_ics(const std::string& path, const IcReadOp
     append(ic.dm, part);
   }
   if (ic.gas.size() + ic.dm.size() == 0) throw InputError(fmt::format("{}: holds no particles", path));
-  check_ids_across_species(path, ic.gas, ic.dm, [](fountain::Species) { return "block ID"; });
+  check_ids_across_species(path, ic.gas.id, ic.dm.id, ic.dm.species, [](fountain::Species) { return "block ID"; });
   ic.gas_total = n;
+  ic.dm_total = ic.dm.size();
   if (options.share_ranks > 1) {
     const hdf5::RowRange rows = gas_share(n, options);
     std::vector<std::size_t> keep(rows.count);
     std::iota(keep.begin(), keep.end(), static_cast<std::size_t>(rows.first));
     ic.gas.permute(keep);
     ic.gas_first = rows.first;
+    const hdf5::RowRange dm_rows = gas_share(ic.dm_total, options);
+    keep.resize(dm_rows.count);
+    std::iota(keep.begin(), keep.end(), static_cast<std::size_t>(dm_rows.first));
+    ic.dm.permute(keep);
+    ic.dm_first = dm_rows.first;
   }
   return ic;
 }
@@ -401,6 +416,9 @@ InitialConditions read_initial_conditions(const std::string& path, const IcReadO
 
   // --- Gas particles ------------------------------------------------------------------
   // (none in a cosmological run of dark matter alone)
+  const bool shared = options.share_ranks > 1;
+  const bool checks_ids = !shared || options.share_rank == 0;  // the share that checks every ID
+  std::vector<std::uint64_t> all_gas_ids;  // a share's check: every gas ID
   if (n > 0) {
     const Species& sp = kGasSpecies;
     if (!file.exists(kGas))
@@ -409,7 +427,7 @@ InitialConditions read_initial_conditions(const std::string& path, const IcReadO
     // A share's rows only (all of them without one).
     const hdf5::RowRange share = gas_share(n, options);
     const hdf5::RowRange* rows = options.share_ranks > 1 ? &share : nullptr;
-    const std::vector<std::uint64_t> ids = read_ids(file, sp, n, rows, options.share_rank == 0);
+    const std::vector<std::uint64_t> ids = read_ids(file, sp, n, rows, checks_ids, shared ? &all_gas_ids : nullptr);
     const std::vector<Vec3> x = read_vectors(file, sp, "Coordinates", n, ids, "coordinates", rows);
     const std::vector<Vec3> v = read_vectors(file, sp, "Velocities", n, ids, "velocity", rows);
     const std::vector<double> mass = read_masses(file, sp, n, ids, table, rows);
@@ -458,16 +476,40 @@ InitialConditions read_initial_conditions(const std::string& path, const IcReadO
 
   ic.gas_total = n;
 
-  // --- Dark matter ----------------------------------------------------------------------
-  ic.dm = read_collisionless(file, kDarkMatterSpecies, n_dm, table, fountain::Species::DarkMatter);
+  // --- Dark matter, and a cosmological file's coarser types after it ----------------------
+  struct Part {
+    const Species* sp;
+    std::uint64_t n;
+    fountain::Species species;
+  };
+  std::vector<Part> parts{{&kDarkMatterSpecies, n_dm, fountain::Species::DarkMatter}};
   if (options.cosmological)
-    for (const Species& low : {kType2, kType3, kType5})
-      append(ic.dm, read_collisionless(file, low, particle_count(file, this_file, low), table,
-                                       fountain::Species::LowResDarkMatter));
-  if (n + ic.dm.size() == 0) file.fail("/Header/NumPart_ThisFile", "announces no particles");
-  check_ids_across_species(path, ic.gas, ic.dm, [](fountain::Species s) {
+    for (const Species* low : {&kType2, &kType3, &kType5})
+      parts.push_back({low, particle_count(file, this_file, *low), fountain::Species::LowResDarkMatter});
+  for (const Part& part : parts) ic.dm_total += part.n;
+  // A share: the same rows of the types laid end to end, each type's part by hyperslab.
+  const hdf5::RowRange dm_share = gas_share(ic.dm_total, options);
+  ic.dm_first = shared ? dm_share.first : 0;
+  std::vector<std::uint64_t> all_dm_ids;
+  std::vector<fountain::Species> all_dm_species;
+  std::uint64_t offset = 0;
+  for (const Part& part : parts) {
+    const std::uint64_t lo = std::clamp(dm_share.first, offset, offset + part.n);
+    const std::uint64_t hi = std::clamp(dm_share.first + dm_share.count, offset, offset + part.n);
+    const hdf5::RowRange rows{lo - offset, hi - lo};
+    std::vector<std::uint64_t> ids;
+    append(ic.dm, read_collisionless(file, *part.sp, part.n, table, part.species, shared ? &rows : nullptr, checks_ids,
+                                     shared && checks_ids ? &ids : nullptr));
+    all_dm_ids.insert(all_dm_ids.end(), ids.begin(), ids.end());
+    all_dm_species.insert(all_dm_species.end(), ids.size(), part.species);
+    offset += part.n;
+  }
+  if (n + ic.dm_total == 0) file.fail("/Header/NumPart_ThisFile", "announces no particles");
+  auto where = [](fountain::Species s) {
     return s == fountain::Species::DarkMatter ? "/PartType1/ParticleIDs" : "/PartType2, 3 or 5/ParticleIDs";
-  });
+  };
+  if (!shared) check_ids_across_species(path, ic.gas.id, ic.dm.id, ic.dm.species, where);
+  else if (checks_ids) check_ids_across_species(path, all_gas_ids, all_dm_ids, all_dm_species, where);
   return ic;
 }
 

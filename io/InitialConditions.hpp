@@ -36,8 +36,10 @@ struct InitialConditions {
   IcFileCosmology cosmology;
   std::string format = "GADGET HDF5";  // or "GADGET binary format 1" / "... format 2"
   // The gas read is the file's rows [gas_first, gas_first + gas.size()) of gas_total (all of
-  // them unless IcReadOptions asked for a share).
+  // them unless IcReadOptions asked for a share), and the collisionless particles likewise of
+  // all the file's collisionless types in the order `dm` lists them (types 1, 2, 3, 5).
   std::size_t gas_first = 0, gas_total = 0;
+  std::size_t dm_first = 0, dm_total = 0;
 };
 
 struct IcReadOptions {
@@ -45,12 +47,13 @@ struct IcReadOptions {
   // internal energy may be missing or 0 (the run sets it), and the low-resolution dark matter
   // of types 2, 3 and 5 is read (as Species::LowResDarkMatter, masses per particle).
   bool cosmological = false;
-  // A share of the gas for one of share_ranks MPI ranks that each hold their own (runs
-  // without star formation; collisionless particles are read whole): the file's gas rows
-  // [n r / R, n (r + 1) / R) for r = share_rank, R = share_ranks, read by hyperslab from HDF5 (a GADGET binary file is
-  // read whole and cut). Every check of the values still holds per particle; that no gas ID
-  // repeats is checked by share_rank 0 alone, which reads every ID for it. A cosmological
-  // share's has_internal_energy speaks for its rows only: the ranks must compare theirs.
+  // A share for one of share_ranks MPI ranks that each hold their own (runs without star
+  // formation): the file's gas rows [n r / R, n (r + 1) / R) for r = share_rank, R =
+  // share_ranks, and the same rows of its collisionless particles (of all their types laid end
+  // to end), read by hyperslab from HDF5 (a GADGET binary file is read whole and cut). Every
+  // check of the values still holds per particle; that no ID repeats, within a type or across
+  // them, is checked by share_rank 0 alone, which reads every ID for it. A cosmological share's
+  // has_internal_energy speaks for its rows only: the ranks must compare theirs.
   int share_rank = 0, share_ranks = 1;
 };
 

@@ -566,6 +566,68 @@ TEST_F(IoTest, LeanStoresWriteWhatTheRunsStoresWrite) {
   EXPECT_EQ(a.read_vec3("/PartType1/Velocities")[0], d.v[1] * 8.0);
 }
 
+// Ranks that hold their own particles read shares of the collisionless particles too: the
+// rows [N r / R, N (r + 1) / R) of all the collisionless types laid end to end (here a share
+// spans the end of type 1 and the start of type 2), together the whole read's bit for bit; an
+// ID repeated across the types or with the gas is found by the first share alone.
+TEST_F(IoTest, CollisionlessParticlesAreReadInSharesAcrossTheirTypes) {
+  const GasParticles g = make_gas(10, 1);
+  CollisionlessParticles d = make_dm(13, 100);
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (i % 2 == 1) d.species[i] = fountain::Species::LowResDarkMatter, d.mass[i] *= 8.0;
+  const fountain::io::CosmologicalIcInfo info{{}, 0.25, {}, {}, {}, {}};
+  const std::string path = file("shares.hdf5");
+  fountain::io::write_initial_conditions(path, g, d, 3.0, info);
+  fountain::io::IcReadOptions options;
+  options.cosmological = true;
+  const auto whole = fountain::io::read_initial_conditions(path, options);
+  ASSERT_EQ(whole.dm.size(), 13u);
+  EXPECT_EQ(whole.dm_total, 13u);
+  std::vector<std::uint64_t> joined;
+  for (int r = 0; r < 3; ++r) {
+    options.share_rank = r;
+    options.share_ranks = 3;
+    const auto share = fountain::io::read_initial_conditions(path, options);
+    EXPECT_EQ(share.dm_total, 13u);
+    EXPECT_EQ(share.dm_first, 13u * static_cast<std::size_t>(r) / 3) << "share " << r;
+    EXPECT_EQ(share.dm.size(), 13u * static_cast<std::size_t>(r + 1) / 3 - 13u * static_cast<std::size_t>(r) / 3);
+    for (std::size_t i = 0; i < share.dm.size(); ++i) {
+      const std::size_t p = share.dm_first + i;
+      EXPECT_EQ(share.dm.species[i], whole.dm.species[p]) << "share " << r << ", row " << i;
+      EXPECT_EQ(share.dm.x[i], whole.dm.x[p]);
+      EXPECT_EQ(share.dm.mass[i], whole.dm.mass[p]);
+    }
+    joined.insert(joined.end(), share.dm.id.begin(), share.dm.id.end());
+  }
+  EXPECT_EQ(joined, whole.dm.id);
+  // The same ID for a particle of each type, rows far apart: the first share names it.
+  auto share_error = [&](int r) {
+    options.share_rank = r;
+    try {
+      fountain::io::read_initial_conditions(path, options);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // (The writer refuses repeated IDs: the file's last type-2 ID is changed in place.)
+  auto set_last_type2_id = [&](std::uint64_t id) {
+    hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    hid_t ds = H5Dopen2(f, "/PartType2/ParticleIDs", H5P_DEFAULT);
+    std::vector<std::uint64_t> ids(6);
+    H5Dread(ds, H5T_NATIVE_UINT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, ids.data());
+    ids.back() = id;
+    H5Dwrite(ds, H5T_NATIVE_UINT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, ids.data());
+    H5Dclose(ds);
+    H5Fclose(f);
+  };
+  set_last_type2_id(d.id[0]);  // the first row of type 1
+  EXPECT_TRUE(contains(share_error(0), "particle ID " + std::to_string(d.id[0]) + " is used by both")) << share_error(0);
+  EXPECT_EQ(share_error(2), "");
+  set_last_type2_id(g.id[9]);
+  EXPECT_TRUE(contains(share_error(0), "is also used by a gas particle")) << share_error(0);
+}
+
 TEST_F(IoTest, DarkMatterMassTableIsUsedWhenMassesAreAbsent) {
   const std::string path = file("ics.hdf5");
   HandWritten h = hand_written(10, 6);

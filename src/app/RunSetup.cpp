@@ -255,8 +255,6 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     read_options.share_rank = ranks->rank();
     read_options.share_ranks = ranks->size();
   }
-  // Collisionless particles are read whole by every rank, which keeps those of its own cells
-  // at the first recut.
   start.ic = io::read_initial_conditions(ic_path, read_options);
   if (ranks && config.comoving.enabled && start.ic.gas_total > 0) {
     // Each share says whether its rows give internal energies (0 is "not given"): all must,
@@ -269,7 +267,8 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
                                    ic_path));
     start.ic.has_internal_energy = given > 0;
   }
-  if (ranks) start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}, false, 0, {}};
+  if (ranks)
+    start.share = Engine::GasShare{start.ic.gas_first, start.ic.gas_total, {}, true, start.ic.dm_total, {}, start.ic.dm_first};
   io::InitialConditions& ic = start.ic;
   // A snapshot used as initial conditions carries its time: the run goes on from there.
   if (config.comoving.enabled) {
@@ -293,14 +292,14 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
     if (state.gas_shared) {
       check_pieces_fill_the_run(state, restart_path(params), *ranks);
       start.share = Engine::GasShare{0, state.gas_total, std::move(state.gas_places), true, state.dm_total,
-                                     std::move(state.dm_places)};
+                                     std::move(state.dm_places), 0};
     }
     // (Runs with stars, which star formation spawns, keep every particle on every rank.)
     const std::size_t state_dm = (state.gas_shared ? state.dm_total : state.dm.size()) - state.dm.count(Species::Star);
-    if (state_dm != ic.dm.size())
+    if (state_dm != ic.dm_total)
       throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "
                                    "have {}",
-                                   restart_path(params), state_dm, ic_path, ic.dm.size()));
+                                   restart_path(params), state_dm, ic_path, ic.dm_total));
     ic.gas = std::move(state.gas);
     ic.dm = std::move(state.dm);
   }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <stdexcept>
 
 #include "core/IdealGas.hpp"
@@ -66,6 +67,10 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   dm_shared_ = share && share->dm_shared;
   dm_total_ = dm_shared_ ? share->dm_total : dm_.size();
   if (dm_shared_) dm_share_places_ = std::move(share->dm_places);
+  if (dm_shared_ && dm_share_places_.empty()) {
+    dm_share_places_.resize(dm_.size());
+    std::iota(dm_share_places_.begin(), dm_share_places_.end(), std::uint64_t{share->dm_first});
+  }
   if (dm_shared_ && dm_share_places_.size() != dm_.size())
     throw std::logic_error(fmt::format("a share of {} collisionless particles with {} places", dm_.size(),
                                        dm_share_places_.size()));

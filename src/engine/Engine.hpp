@@ -64,14 +64,15 @@ class Engine {
  public:
   // The gas one rank read of a run across ranks that hold shares (RunConfig::ranks_hold_shares):
   // the file's rows [first, first + gas.size()) of `total`, or (a restart set's pieces) the
-  // places in the run given one by one. Collisionless particles are read whole by every rank
-  // from initial conditions, or as a restart set's pieces with their places (dm_shared).
+  // places in the run given one by one; with dm_shared, the collisionless particles alike
+  // (otherwise every rank read every one).
   struct GasShare {
     std::size_t first = 0, total = 0;
     std::vector<std::uint64_t> places;  // empty: first, first + 1, ...
     bool dm_shared = false;
     std::size_t dm_total = 0;
-    std::vector<std::uint64_t> dm_places;
+    std::vector<std::uint64_t> dm_places;  // empty: dm_first, dm_first + 1, ...
+    std::size_t dm_first = 0;
   };
   // Without `share`, the gas is every particle of the run.
   Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles dm = {},
@@ -400,7 +401,7 @@ class Engine {
   // reads another leaf's): an owned leaf's lie in this rank's arrays in the run's order.
   std::vector<std::size_t> run_dm_first_;
   std::size_t dm_total_ = 0;
-  // Before the first recut: the collisionless particles here are a restart set's pieces, with
+  // Before the first recut: the collisionless particles here are a share of the run's, with
   // their places (otherwise every rank read every one, in the run's order).
   bool dm_shared_ = false;
   std::vector<std::uint64_t> dm_share_places_;
