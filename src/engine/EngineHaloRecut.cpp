@@ -92,6 +92,26 @@ std::vector<std::size_t> top_cell_starts(const std::vector<RecutEntry>& entries,
   return begin;
 }
 
+// The places in the run's order of the particles at `local` in arrays that hold the leaves
+// `kept` picks end to end in the run's order (`leaves`): leaf c starts at first_here(c) there
+// and at run_first[c] in the run.
+template <class Kept, class FirstHere>
+std::vector<std::size_t> places_in_run(const std::vector<std::size_t>& local, const std::vector<int>& leaves, Kept&& kept,
+                                       FirstHere&& first_here, const std::vector<std::size_t>& run_first,
+                                       const char* no_leaf) {
+  std::vector<std::pair<std::size_t, int>> starts;
+  for (int c : leaves)
+    if (kept(c)) starts.emplace_back(first_here(c), c);
+  std::vector<std::size_t> out(local.size());
+  for (std::size_t k = 0; k < local.size(); ++k) {
+    auto it = std::upper_bound(starts.begin(), starts.end(), std::pair{local[k], std::numeric_limits<int>::max()});
+    if (it == starts.begin()) throw std::logic_error(fmt::format(fmt::runtime(no_leaf), local[k]));
+    --it;
+    out[k] = run_first[static_cast<std::size_t>(it->second)] + (local[k] - it->first);
+  }
+  return out;
+}
+
 }  // namespace
 
 void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& measured, const ForEach& for_each) {
@@ -551,34 +571,17 @@ std::size_t Engine::collisionless_count(Species s) const {
 std::vector<std::size_t> Engine::run_collisionless_places(const std::vector<std::size_t>& local) const {
   if (!layout_.halo_mode() || space_.leaves().empty()) return local;
   // This rank's arrays hold its own leaves' collisionless particles, in the run's order.
-  std::vector<std::pair<std::size_t, int>> starts;
-  for (int c : leaves_in_run_order())
-    if (mine(c)) starts.emplace_back(space_.cell(c).dm_first, c);
-  std::vector<std::size_t> out(local.size());
-  for (std::size_t k = 0; k < local.size(); ++k) {
-    auto it = std::upper_bound(starts.begin(), starts.end(), std::pair{local[k], std::numeric_limits<int>::max()});
-    if (it == starts.begin())
-      throw std::logic_error(fmt::format("collisionless particle {} is in no leaf owned here", local[k]));
-    --it;
-    out[k] = run_dm_first_[static_cast<std::size_t>(it->second)] + (local[k] - it->first);
-  }
-  return out;
+  return places_in_run(
+      local, leaves_in_run_order(), [&](int c) { return mine(c); }, [&](int c) { return space_.cell(c).dm_first; },
+      run_dm_first_, "collisionless particle {} is in no leaf owned here");
 }
 
 std::vector<std::size_t> Engine::run_places(const std::vector<std::size_t>& local) const {
   if (!layout_.halo_mode() || space_.leaves().empty()) return local;
-  // The leaf of each local index: the held leaves lie in the arrays in the run's order.
-  std::vector<std::pair<std::size_t, int>> starts;
-  for (int c : leaves_in_run_order())
-    if (keeps_current(c)) starts.emplace_back(space_.cell(c).first, c);
-  std::vector<std::size_t> out(local.size());
-  for (std::size_t k = 0; k < local.size(); ++k) {
-    auto it = std::upper_bound(starts.begin(), starts.end(), std::pair{local[k], std::numeric_limits<int>::max()});
-    if (it == starts.begin()) throw std::logic_error(fmt::format("particle {} is in no leaf held here", local[k]));
-    --it;
-    out[k] = run_first_[static_cast<std::size_t>(it->second)] + (local[k] - it->first);
-  }
-  return out;
+  // The held leaves lie in the arrays in the run's order.
+  return places_in_run(
+      local, leaves_in_run_order(), [&](int c) { return keeps_current(c); }, [&](int c) { return space_.cell(c).first; },
+      run_first_, "particle {} is in no leaf held here");
 }
 
 }  // namespace fountain
