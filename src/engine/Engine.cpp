@@ -88,7 +88,7 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     double lightest = 0.0;
     for (std::size_t i = 0; i < dm_.size(); ++i)
       if (dm_.species[i] == kind && (lightest == 0.0 || dm_.mass[i] < lightest)) lightest = dm_.mass[i];
-    if (dm_shared_) {  // this rank's pieces of a restart set: the lightest over every rank's
+    if (dm_shared_) {  // this rank's share of them: the lightest over every rank's
       const double here = lightest;
       for (const auto& theirs : ranks_->allgather_values(std::span<const double>(&here, 1), "lightest particle"))
         if (theirs[0] > 0.0 && (lightest == 0.0 || theirs[0] < lightest)) lightest = theirs[0];
@@ -108,15 +108,13 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   }
   for (std::size_t i = 0; i < gas_.size(); ++i)
     if (!(gas_.mass_initial[i] > 0.0)) gas_.mass_initial[i] = gas_.mass[i];
-  // Star formation's spawning and feedback read and change particles anywhere, and the
-  // periodic mesh is fed every particle: those runs keep every rank's copy whole.
+  // Star formation's spawning and feedback read and change particles anywhere: those runs
+  // keep every rank's copy whole; every other run holds only its own cells and their halo.
   if (ranks_)
     layout_ = domain::RankLayout(ranks_->rank(), ranks_->size(), config_.ranks_hold_shares(),
                                  config_.repartition_imbalance, config_.repartition_min_steps);
-  if (layout_.halo_mode()) {
-    ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
-    ctx_->halo_mode = true;
-  }
+  if (ranks_) ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
+  ctx_->halo_mode = layout_.halo_mode();
   if (share && !layout_.halo_mode())
     throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
   // Each rank builds the tree of its own leaves' particles and assembles each step's tree
@@ -124,7 +122,6 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
   if (ranks_ && config_.gravity.enabled && (config_.assemble_gravity_tree || layout_.halo_mode())) {
     tree_messages_ = std::make_unique<TreeMessagesOverRanks>(*ranks_);
     ctx_->tree_messages = tree_messages_.get();
-    ctx_->owns_leaf = [this](int c) { return layout_.mine(c); };
     if (layout_.halo_mode()) {
       ctx_->leaf_places = &run_first_;
       ctx_->leaf_dm_places = &run_dm_first_;

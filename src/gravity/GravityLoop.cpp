@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <vector>
 
 #include "gravity/GravityParams.hpp"
@@ -142,61 +143,45 @@ void compute_long_range(StepContext& ctx) {
   LongRangeForce& lr = *ctx.long_range;
   GasParticles& gas = ctx.gas;
   CollisionlessParticles& dm = ctx.dm;
+  // The particles this rank feeds the mesh: every one, or in halo mode those of the leaves it
+  // owns, whose forces come back to it (the holders of a leaf receive its gas's with the
+  // step's other changes).
+  std::vector<std::size_t> g, d;
   if (ctx.halo_mode) {
-    // Each rank feeds the mesh the particles of the leaves it owns and gets their forces;
-    // the holders of a leaf receive its gas's with the step's other changes.
-    std::vector<std::size_t> g, d;
     for (const int c : ctx.space.leaves()) {
       if (!ctx.owns_leaf(c)) continue;
       const Cell& cell = ctx.space.cell(c);
       for (std::size_t i = cell.first; i < cell.first + cell.count; ++i) g.push_back(i);
       for (std::size_t i = cell.dm_first; i < cell.dm_first + cell.dm_count; ++i) d.push_back(i);
     }
-    const std::size_t n = g.size() + d.size();
-    std::vector<Vec3> x(n);
-    std::vector<double> m(n);
-    for (std::size_t k = 0; k < g.size(); ++k) {
-      x[k] = gas.x[g[k]];
-      m[k] = gas.dynamical_mass(g[k]);
-    }
-    for (std::size_t k = 0; k < d.size(); ++k) {
-      x[g.size() + k] = dm.x[d[k]];
-      m[g.size() + k] = dm.mass[d[k]];
-    }
-    lr.acceleration.resize(n);
-    lr.potential.resize(n);
-    lr.mesh.compute_owned(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
-    for (std::size_t k = 0; k < g.size(); ++k) {
-      gas.a_mesh[g[k]] = lr.acceleration[k];
-      gas.potential_mesh[g[k]] = lr.potential[k];
-    }
-    for (std::size_t k = 0; k < d.size(); ++k) {
-      dm.a_mesh[d[k]] = lr.acceleration[g.size() + k];
-      dm.potential_mesh[d[k]] = lr.potential[g.size() + k];
-    }
-    return;
+  } else {
+    g.resize(gas.size());
+    d.resize(dm.size());
+    std::iota(g.begin(), g.end(), std::size_t{0});
+    std::iota(d.begin(), d.end(), std::size_t{0});
   }
-  const std::size_t n = gas.size() + dm.size();
+  const std::size_t n = g.size() + d.size();
   std::vector<Vec3> x(n);
   std::vector<double> m(n);
-  for (std::size_t i = 0; i < gas.size(); ++i) {
-    x[i] = gas.x[i];
-    m[i] = gas.dynamical_mass(i);
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    x[k] = gas.x[g[k]];
+    m[k] = gas.dynamical_mass(g[k]);
   }
-  for (std::size_t i = 0; i < dm.size(); ++i) {
-    x[gas.size() + i] = dm.x[i];
-    m[gas.size() + i] = dm.mass[i];
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    x[g.size() + k] = dm.x[d[k]];
+    m[g.size() + k] = dm.mass[d[k]];
   }
   lr.acceleration.resize(n);
   lr.potential.resize(n);
-  lr.mesh.compute(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
-  for (std::size_t i = 0; i < gas.size(); ++i) {
-    gas.a_mesh[i] = lr.acceleration[i];
-    gas.potential_mesh[i] = lr.potential[i];
+  if (ctx.halo_mode) lr.mesh.compute_owned(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
+  else lr.mesh.compute(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
+  for (std::size_t k = 0; k < g.size(); ++k) {
+    gas.a_mesh[g[k]] = lr.acceleration[k];
+    gas.potential_mesh[g[k]] = lr.potential[k];
   }
-  for (std::size_t i = 0; i < dm.size(); ++i) {
-    dm.a_mesh[i] = lr.acceleration[gas.size() + i];
-    dm.potential_mesh[i] = lr.potential[gas.size() + i];
+  for (std::size_t k = 0; k < d.size(); ++k) {
+    dm.a_mesh[d[k]] = lr.acceleration[g.size() + k];
+    dm.potential_mesh[d[k]] = lr.potential[g.size() + k];
   }
 }
 
