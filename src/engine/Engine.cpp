@@ -402,6 +402,10 @@ void Engine::rebuild() {
   const std::vector<std::pair<Vec3, double>> measured = ranks_ ? measured_work() : std::vector<std::pair<Vec3, double>>{};
   const ForEach for_each = [this](std::size_t n, const std::function<void(std::size_t)>& fn) { executor_.for_each(n, fn); };
   const std::uint64_t bytes_before = ranks_ ? ranks_->traffic().bytes : 0;
+  // Particles are about to be reordered, so no tree survives the rebuild: dropped before the
+  // recut and the holders' copies rather than beside the new one, as they set a rank's peak.
+  ctx_->tree.reset();
+  ctx_->tree_across.reset();
   // In halo mode each rank holds only some of the particles: the ranks recut together, each
   // top cell built by its owner (EngineHaloRecut.cpp).
   if (layout_.halo_mode()) {
@@ -409,7 +413,6 @@ void Engine::rebuild() {
   } else {
     space_.recut(gas_, dm_, for_each);
   }
-  ctx_->tree.reset();  // particles were reordered: a new tree is built below
   ctx_->tree_current = false;
   if (ranks_ && !layout_.halo_mode()) layout_.assign_owners(space_, measured, steps_);
   if (!layout_.halo_mode()) {

@@ -112,11 +112,13 @@ const GravityTree& walk_tree(const StepContext& ctx) {
 
 void build_tree(StepContext& ctx) {
   if (ctx.tree_messages) {
+    ctx.tree_across.reset();  // not beside the new one
     const OwnSources own = own_sources(ctx);
     ctx.tree_across = std::make_unique<TreeAcrossRanks>(*ctx.tree_messages, own.view(), tree_config(ctx), walk_config(ctx));
     ctx.tree.reset();  // assembled for each step's walks (finish_tree)
     return;
   }
+  ctx.tree.reset();  // not beside the new one
   const GasParticles& gas = ctx.gas;
   const CollisionlessParticles& dm = ctx.dm;
   const std::size_t n = gas.size() + dm.size();
@@ -220,15 +222,14 @@ void finish_tree(StepContext& ctx) {
       ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
     else if (ctx.tree_update == StepContext::TreeUpdate::build)
       build_tree(ctx);
-    std::vector<LeafTargets> leaves;
+    // Each leaf's targets as a batch's bounds, not held: the walks list them again.
+    std::vector<TargetBatch> batches;
+    LeafTargets leaf;
     for (const int c : ctx.space.leaves()) {
       if (!ctx.owns_leaf(c)) continue;
-      leaves.emplace_back();
-      leaf_targets(ctx, c, leaves.back());
-      if (leaves.back().targets.empty()) leaves.pop_back();
+      leaf_targets(ctx, c, leaf);
+      if (!leaf.targets.empty()) batches.emplace_back(leaf.targets);
     }
-    std::vector<TargetBatch> batches;
-    for (const LeafTargets& l : leaves) batches.push_back({l.targets});
     ctx.tree_across->tree_for(*ctx.tree_messages, batches);  // what walk_tree() gives the walks
     return;
   }

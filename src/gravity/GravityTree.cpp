@@ -81,7 +81,7 @@ void GravityTree::build_from(std::span<const Vec3> positions, std::span<const do
   // Partitioned with their positions beside their indices, so no pass reads through an index.
   std::vector<SortItem> items(static_cast<std::size_t>(n)), scratch(static_cast<std::size_t>(n));
   for (std::int32_t i = 0; i < n; ++i) items[static_cast<std::size_t>(i)] = {positions[i], i};
-  nodes_.reserve(2 * static_cast<std::size_t>(n) / config_.max_leaf_size + 16);
+  nodes_.reserve(node_estimate(static_cast<std::size_t>(n), config_.max_leaf_size));
   build(0, n, cube.centre, cube.side, depth, items, scratch);
   for (TreeNode& node : nodes_)
     if (node.next == static_cast<std::int32_t>(nodes_.size())) node.next = -1;

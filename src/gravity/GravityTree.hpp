@@ -1,5 +1,6 @@
 // Octree of source particles with quadrupole moments, and the gather-only walk that gives a target's acceleration.
 #pragma once
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -146,6 +147,14 @@ class GravityTree {
   static int group_size(const WalkConfig& config) { return config.split.enabled() ? kGroupSize : kIsolatedGroupSize; }
   void accelerate(std::span<const GravityTarget> targets, const WalkConfig& config, std::span<GravityResult> results,
                   const ForEach& for_each = {}) const;
+
+  // Room for the nodes of a tree of n sources, enough for the sets measured at 8 per leaf
+  // (0.36 n nodes clustered, 0.45 n uniform, 0.57 n on the lattice of cosmological initial
+  // conditions), so that a build rarely grows the array: doubling it from a short guess had
+  // set memory peaks.
+  static std::size_t node_estimate(std::size_t n, int max_leaf_size) {
+    return 5 * n / static_cast<std::size_t>(std::max(1, max_leaf_size)) + 16;
+  }
 
   const std::vector<TreeNode>& nodes() const { return nodes_; }
   // Source index of the particle at each tree position.

@@ -144,7 +144,7 @@ double* PeriodicMesh::plane(int local) {
 }
 
 std::size_t PeriodicMesh::bytes() const {
-  return sizeof(std::int64_t) * fixed_.size() + sizeof(double) * (green_.size() + gradient_.size()) +
+  return sizeof(std::int64_t) * fixed_.size() + sizeof(double) * (green_.size() + gradient_doubles()) +
          sizeof(double) * (fft_->planes_doubles + fft_->columns_doubles);
 }
 
@@ -451,7 +451,7 @@ void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const 
   // the clouds of many particles, and each cloud reads eight nodes' three.
   const auto plane_nodes = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
   const std::size_t gradient_planes = nx > 0 ? static_cast<std::size_t>(nx + 1) : 0;  // a rank without planes has none
-  gradient_.resize(3 * plane_nodes * gradient_planes);
+  gradient_.resize(gradient_doubles());
   for_each_or_serial(for_each, gradient_planes, [&](std::size_t l) {
     const int li = static_cast<int>(l);
     for (int j = 0; j < n; ++j)
@@ -484,6 +484,12 @@ void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const 
     acceleration[p] = acc;
     potential[p] = pot;
   });
+  // Remade at each mesh step: held between them it would sit in every step's peak of memory.
+  std::vector<double>().swap(gradient_);
+}
+
+std::size_t PeriodicMesh::gradient_doubles() const {
+  return nx_ > 0 ? 3 * static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_) * static_cast<std::size_t>(nx_ + 1) : 0;
 }
 
 }  // namespace fountain::gravity

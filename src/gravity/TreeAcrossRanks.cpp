@@ -44,6 +44,13 @@ void widen(Envelope& e, const Envelope& other) {
 
 double extent(const Envelope& e) { return std::max({e.hi.x - e.lo.x, e.hi.y - e.lo.y, e.hi.z - e.lo.z}); }
 
+// Frees a vector's memory (`v = {}` would pick the initializer-list assignment, which keeps
+// its capacity).
+template <class T>
+void release(std::vector<T>& v) {
+  std::vector<T>().swap(v);
+}
+
 }  // namespace
 
 // The assembly's steps, each a collective (docs/gravity.md, "Across ranks").
@@ -63,14 +70,15 @@ class TreeAssembler {
     tree_.length_unit_ = std::ldexp(1.0, std::ilogb(cube_.side));
     build_top();
     order_ = preorder();
-    scratch_ = {};
+    release(scratch_);
     // Room for the kept part at once (GravityTree's estimate of its nodes), rather than by
     // doubling, which set the peak of a rank's memory here.
     std::size_t kept = 0;
     for (const TopNode& node : top_)
       if (node.kind == Kind::gathered) kept += static_cast<std::size_t>(node.total);
     kept += mine_.positions.size();
-    tree_.nodes_.reserve(2 * kept / static_cast<std::size_t>(std::max(1, tree_config_.max_leaf_size)) + 16);
+    kept_sources_ = kept;
+    tree_.nodes_.reserve(GravityTree::node_estimate(kept, tree_config_.max_leaf_size));
     tree_.index_.reserve(kept);
     for (auto* v : {&tree_.mass_, &tree_.spline_, &tree_.eps_}) v->reserve(kept);
     tree_.pos_.reserve(kept);
@@ -309,6 +317,7 @@ class TreeAssembler {
     block.nodes = static_cast<std::int32_t>(sub.nodes_.size());
     block.first = static_cast<std::int32_t>(tree_.pos_.size());
     block.sources = static_cast<std::int32_t>(sub.pos_.size());
+    reserve_kept_nodes(sub.nodes_.size(), sub.pos_.size());
     for (std::size_t n = 0; n < sub.nodes_.size(); ++n) {
       TreeNode copy = sub.nodes_[n];
       copy.first += block.first;
@@ -331,6 +340,20 @@ class TreeAssembler {
       tree_.store_source(static_cast<std::int32_t>(at), tree_.index_[at], {sub.pos_[k], sub.mass_[k], sub.eps_[k]});
     }
     return block;
+  }
+
+  // Room for a block of `nodes` nodes over `sources` sources in the kept part. Where the first
+  // guess falls short (a lattice of initial conditions has more nodes per source than a
+  // clustered set), the room grows once to what the blocks so far give for every kept source,
+  // with an eighth to spare, rather than by doubling.
+  void reserve_kept_nodes(std::size_t nodes, std::size_t sources) {
+    const std::size_t need = tree_.nodes_.size() + nodes;
+    if (tree_.nodes_.capacity() >= need) return;
+    const std::size_t placed = tree_.pos_.size() + sources;
+    const std::size_t left = kept_sources_ > placed ? kept_sources_ - placed : 0;
+    const double per_source = static_cast<double>(need) / static_cast<double>(std::max<std::size_t>(placed, 1));
+    const auto more = static_cast<std::size_t>(per_source * static_cast<double>(left));
+    tree_.nodes_.reserve(need + more + (need + more) / 8);
   }
 
   void grow_sources(std::size_t n) {
@@ -367,8 +390,8 @@ class TreeAssembler {
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) gathered_members_.push_back(member(k));
       node.first = first;
     }
-    items_ = {};
-    scratch_ = {};
+    release(items_);
+    release(scratch_);
   }
 
   SourceRecord record(std::int32_t i) const {
@@ -461,23 +484,15 @@ class TreeAssembler {
       widest = std::min(widest, 0.5 * tree_config_.box_size - walk_config_.split.cutoff_radius());
     std::vector<Envelope> out;
     for (const TargetBatch& batch : batches_) {
-      if (batch.targets.empty()) continue;
+      if (batch.empty) continue;
       Envelope e;
-      e.lo = e.hi = batch.targets[0].position;
-      for (const GravityTarget& t : batch.targets) {
-        for (int d = 0; d < 3; ++d) {
-          e.lo[d] = std::min(e.lo[d], t.position[d]);
-          e.hi[d] = std::max(e.hi[d], t.position[d]);
-        }
-        e.h_max = std::max(e.h_max, spline_length(t.softening));
-        e.h_min = std::min(e.h_min, spline_length(t.softening));
-        if (t.a_old >= 0.0) {
-          e.any_relative = 1;
-          e.a_min = std::min(e.a_min, t.a_old);
-        } else {
-          e.any_barnes_hut = 1;
-        }
-      }
+      e.lo = batch.lo;
+      e.hi = batch.hi;
+      e.h_max = batch.h_max;
+      e.h_min = batch.h_min;
+      e.a_min = batch.a_min;
+      e.any_relative = batch.any_relative ? 1 : 0;
+      e.any_barnes_hut = batch.any_barnes_hut ? 1 : 0;
       if (!out.empty()) {
         Envelope merged = out.back();
         widen(merged, e);
@@ -614,6 +629,7 @@ class TreeAssembler {
     tree_.nodes_.resize(prefix_nodes_);
     tree_.index_.resize(prefix_sources_);
     grow_sources(prefix_sources_);
+    reserve_assembly();
     std::vector<MessageReader> in;
     for (const auto& m : received_) in.emplace_back(m);
     // Where each top node's subtree starts, and (received parts) its extent in the array.
@@ -708,12 +724,46 @@ class TreeAssembler {
     // apart): as in one rank's tree, that makes the tree loose. Every rank computes these
     // nodes from the same parts, so all agree.
     for (auto t = top_internal.rbegin(); t != top_internal.rend(); ++t) loose_ = tree_.node_moments(*t) || loose_;
+    release(received_);  // copied into the tree
+  }
+
+  // Room for what assemble() appends to the kept part, grown once to the size it needs (with
+  // an eighth to spare for the next steps) rather than by doubling: the top's nodes and the
+  // parts the other ranks sent, counted from their messages' headers.
+  void reserve_assembly() {
+    std::size_t nodes = 0, sources = 0;
+    std::vector<MessageReader> in;
+    for (const auto& m : received_) in.emplace_back(m);
+    for (const std::int32_t t : order_) {
+      const TopNode& top = top_[static_cast<std::size_t>(t)];
+      if (top.kind == Kind::internal) {
+        ++nodes;
+      } else if (top.kind == Kind::held && top.owner != ranks_->rank()) {
+        MessageReader& from = in[static_cast<std::size_t>(top.owner)];
+        const auto node_count = static_cast<std::size_t>(from.get<std::int64_t>());
+        const auto source_count = static_cast<std::size_t>(from.get<std::int64_t>());
+        from.take(node_count * sizeof(Exported) + source_count * sizeof(SourceRecord));
+        nodes += node_count;
+        sources += source_count;
+      }
+    }
+    const auto room = [](std::size_t n) { return n + n / 8; };
+    if (tree_.nodes_.capacity() < prefix_nodes_ + nodes) tree_.nodes_.reserve(room(prefix_nodes_ + nodes));
+    if (tree_.pos_.capacity() < prefix_sources_ + sources) {
+      const std::size_t n = room(prefix_sources_ + sources);
+      tree_.index_.reserve(n);
+      tree_.pos_.reserve(n);
+      for (auto* v : {&tree_.mass_, &tree_.spline_, &tree_.eps_}) v->reserve(n);
+      tree_.spline_f_.reserve(n);
+      tree_.spline_inv_f_.reserve(n);
+    }
   }
 
   TreeMessages* ranks_ = nullptr;  // the present call's
   RankSources mine_;                // the present call's
   std::span<const TargetBatch> batches_;
   std::size_t own_count_ = 0;
+  std::size_t kept_sources_ = 0;  // own and gathered sources, for the kept part's room
   bool has_sources_ = false, loose_ = false;
   TreeConfig tree_config_;
   WalkConfig walk_config_;
@@ -729,6 +779,28 @@ class TreeAssembler {
   std::vector<std::vector<char>> received_;
   TreeAcrossRanksCounts counts_;
 };
+
+TargetBatch::TargetBatch(std::span<const GravityTarget> targets) {
+  if (targets.empty()) return;
+  empty = false;
+  lo = hi = targets[0].position;
+  h_min = std::numeric_limits<double>::infinity();
+  a_min = std::numeric_limits<double>::infinity();
+  for (const GravityTarget& t : targets) {
+    for (int d = 0; d < 3; ++d) {
+      lo[d] = std::min(lo[d], t.position[d]);
+      hi[d] = std::max(hi[d], t.position[d]);
+    }
+    h_max = std::max(h_max, spline_length(t.softening));
+    h_min = std::min(h_min, spline_length(t.softening));
+    if (t.a_old >= 0.0) {
+      any_relative = true;
+      a_min = std::min(a_min, t.a_old);
+    } else {
+      any_barnes_hut = true;
+    }
+  }
+}
 
 TreeAcrossRanks::TreeAcrossRanks(TreeMessages& ranks, const RankSources& mine, const TreeConfig& tree_config,
                                  const WalkConfig& walk_config)

@@ -35,12 +35,18 @@ struct RankSources {
   std::span<const std::int32_t> names = {};
 };
 
-// The targets a rank will walk in one call of GravityTree::accelerate (a cell's active
-// particles, say): the walk groups them among themselves only, so a box around them holds
-// every group's box. Another rank sends the inside of each of its nodes that some walk of
-// these targets could open.
+// What bounds the walks of the targets a rank passes to one call of GravityTree::accelerate
+// (a cell's active particles, say): the walk groups them among themselves only, so the box
+// around them holds every group's box. Another rank sends the inside of each of its nodes
+// that some walk of these targets could open. A summary, so that the targets need not be
+// held for the assembly.
 struct TargetBatch {
-  std::span<const GravityTarget> targets;
+  TargetBatch(std::span<const GravityTarget> targets);  // NOLINT: a batch stands for its targets
+  bool empty = true;
+  Vec3 lo, hi;                             // the targets' positions' box
+  double h_min = 0.0, h_max = 0.0;         // their spline lengths
+  double a_min = 0.0;                      // the smallest |a_old| of those that have one
+  bool any_barnes_hut = false, any_relative = false;  // with no |a_old|; with one
 };
 
 // What one assembly held and moved on this rank, for the traffic figures.
