@@ -173,17 +173,19 @@ void compute_long_range(StepContext& ctx) {
     x[g.size() + k] = dm.x[d[k]];
     m[g.size() + k] = dm.mass[d[k]];
   }
-  lr.acceleration.resize(n);
-  lr.potential.resize(n);
-  if (ctx.halo_mode) lr.mesh.compute_owned(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
-  else lr.mesh.compute(x, m, lr.acceleration, lr.potential, ctx.in_task_for_each);
+  // The results go into the particles' fields at once: nothing of this is kept between
+  // mesh steps.
+  std::vector<Vec3> acceleration(n);
+  std::vector<double> potential(n);
+  if (ctx.halo_mode) lr.mesh.compute_owned(x, m, acceleration, potential, ctx.in_task_for_each);
+  else lr.mesh.compute(x, m, acceleration, potential, ctx.in_task_for_each);
   for (std::size_t k = 0; k < g.size(); ++k) {
-    gas.a_mesh[g[k]] = lr.acceleration[k];
-    gas.potential_mesh[g[k]] = lr.potential[k];
+    gas.a_mesh[g[k]] = acceleration[k];
+    gas.potential_mesh[g[k]] = potential[k];
   }
   for (std::size_t k = 0; k < d.size(); ++k) {
-    dm.a_mesh[d[k]] = lr.acceleration[g.size() + k];
-    dm.potential_mesh[d[k]] = lr.potential[g.size() + k];
+    dm.a_mesh[d[k]] = acceleration[g.size() + k];
+    dm.potential_mesh[d[k]] = potential[g.size() + k];
   }
 }
 

@@ -1,22 +1,17 @@
-// A periodic run's long-range gravity: the mesh and the accelerations and potentials of its last computation.
+// A periodic run's long-range gravity: the mesh, and how many cells a run's mesh has.
 #pragma once
 #include <cmath>
 #include <cstddef>
 #include <memory>
-#include <vector>
 
-#include "core/Vec3.hpp"
 #include "gravity/PeriodicMesh.hpp"
 
 namespace fountain::gravity {
 
-// Per tree source (gas first, then collisionless particles, as build_tree numbers them; in
-// halo mode this rank's own leaves' particles), at the positions of the step's last mesh
-// computation.
+// The mesh's forces go straight into the particles' a_mesh and potential_mesh
+// (compute_long_range).
 struct LongRangeForce {
   PeriodicMesh mesh;
-  std::vector<Vec3> acceleration;
-  std::vector<double> potential;
 
   // slabs: the ranks that share the mesh (null: this process holds all of it).
   LongRangeForce(int cells, double box, double r_s, double G, std::unique_ptr<MeshSlabs> slabs = nullptr)

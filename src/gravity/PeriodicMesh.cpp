@@ -309,7 +309,14 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
     throw std::invalid_argument("PeriodicMesh::compute: positions, masses and outputs differ in length");
   assign(positions, masses, for_each);
   solve(for_each);
-  interpolate(positions, masses, acceleration, potential, for_each);
+  std::fill(acceleration.begin(), acceleration.end(), Vec3{});
+  std::fill(potential.begin(), potential.end(), 0.0);
+  interpolate(positions, masses,
+              [&](std::size_t p, const Vec3& a, double phi) {
+                acceleration[p] = a;
+                potential[p] = phi;
+              },
+              for_each);
   if (slabs_) {
     // Every particle was interpolated by one rank; the others left it +0.0.
     slabs_->combine_bits(std::span<double>(reinterpret_cast<double*>(acceleration.data()), 3 * count));
@@ -396,30 +403,32 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
   }
   deposit(x_in, m_in, range, for_each);
   solve(for_each);
-  std::vector<Vec3> a_in(x_in.size());
-  std::vector<double> phi_in(x_in.size());
-  interpolate(x_in, m_in, a_in, phi_in, for_each);
-  // Back to each sender, the forces of the particles whose lower plane is here.
-  std::vector<char> interpolated(x_in.size());
+  // Back to each sender, the forces of the particles whose lower plane is here, each
+  // interpolated straight into its record's place.
   std::fill(counts.begin(), counts.end(), 0);
   for (std::size_t k = 0; k < x_in.size(); ++k) {
     const int lo = lower_plane(x_in[k]) - x0_;
-    interpolated[k] = lo >= 0 && lo < nx_;
-    if (interpolated[k]) counts[origin[k].first] += sizeof(Back);
+    if (lo >= 0 && lo < nx_) counts[origin[k].first] += sizeof(Back);
   }
-  std::vector<Vec3>().swap(x_in);
-  std::vector<double>().swap(m_in);
   at[0] = 0;
   for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1];
   std::vector<char> back(at.back() + counts.back());
-  for (std::size_t k = 0; k < a_in.size(); ++k) {
-    if (!interpolated[k]) continue;
-    const Back record{origin[k].second, a_in[k], phi_in[k]};
-    std::memcpy(back.data() + at[origin[k].first], &record, sizeof record);
-    at[origin[k].first] += sizeof record;
+  std::vector<std::size_t> place(x_in.size());  // where each record goes in `back`
+  for (std::size_t k = 0; k < x_in.size(); ++k) {
+    const int lo = lower_plane(x_in[k]) - x0_;
+    if (lo < 0 || lo >= nx_) continue;
+    place[k] = at[origin[k].first];
+    at[origin[k].first] += sizeof(Back);
   }
-  std::vector<Vec3>().swap(a_in);
-  std::vector<double>().swap(phi_in);
+  interpolate(x_in, m_in,
+              [&](std::size_t k, const Vec3& a, double phi) {
+                const Back record{origin[k].second, a, phi};
+                std::memcpy(back.data() + place[k], &record, sizeof record);
+              },
+              for_each);
+  std::vector<Vec3>().swap(x_in);
+  std::vector<double>().swap(m_in);
+  std::vector<std::size_t>().swap(place);
   const std::vector<char> in = slabs_->exchange(std::move(back), counts);
   if (in.size() != count * sizeof(Back))
     throw std::logic_error("PeriodicMesh::compute_owned: " + std::to_string(in.size() / sizeof(Back)) +
@@ -433,8 +442,9 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
   }
 }
 
-void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const double> masses,
-                               std::span<Vec3> acceleration, std::span<double> potential, const ForEach& for_each) {
+template <class Store>
+void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const double> masses, const Store& store,
+                               const ForEach& for_each) {
   const std::size_t count = positions.size();
   std::int64_t assigned = 0;
   for (const std::int64_t f : fixed_) assigned += f;
@@ -472,17 +482,14 @@ void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const 
     double pot = 0.0;
     const Cloud cloud = cloud_of(positions[p], box_, cell_inv, n);
     const int lo = cloud.w[0].lo - x0;
-    if (lo >= 0 && lo < nx) {  // the rank of its lower plane interpolates it
-      for_each_cloud_node(cloud, n, [&](int i, int j, int k, double weight) {
-        const int local = i == cloud.w[0].lo ? lo : lo + 1;
-        const double* g = &gradient_[3 * (static_cast<std::size_t>(local) * plane_nodes + static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k))];
-        for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
-        pot += weight * plane(local)[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(k)];
-      });
-      pot = pot + background + self * masses[p];
-    }
-    acceleration[p] = acc;
-    potential[p] = pot;
+    if (lo < 0 || lo >= nx) return;  // the rank of its lower plane interpolates it
+    for_each_cloud_node(cloud, n, [&](int i, int j, int k, double weight) {
+      const int local = i == cloud.w[0].lo ? lo : lo + 1;
+      const double* g = &gradient_[3 * (static_cast<std::size_t>(local) * plane_nodes + static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k))];
+      for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
+      pot += weight * plane(local)[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(k)];
+    });
+    store(p, acc, pot + background + self * masses[p]);
   });
   // Remade at each mesh step: held between them it would sit in every step's peak of memory.
   std::vector<double>().swap(gradient_);

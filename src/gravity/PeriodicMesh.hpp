@@ -80,9 +80,12 @@ class PeriodicMesh {
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
   void deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
                const ForEach& for_each);
-  // The forces at `positions` whose lower plane is this rank's (+0.0 for the others).
-  void interpolate(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
-                   std::span<double> potential, const ForEach& for_each);
+  // The force and potential at each of `positions` whose lower plane is this rank's, given to
+  // store(index, acceleration, potential) (from any thread, each index once); the others are
+  // skipped.
+  template <class Store>
+  void interpolate(std::span<const Vec3> positions, std::span<const double> masses, const Store& store,
+                   const ForEach& for_each);
   void solve(const ForEach& for_each);
   void transpose(bool to_columns, const ForEach& for_each);
   std::vector<double> green_function() const;
