@@ -61,19 +61,13 @@ void leaf_targets(const StepContext& ctx, int c, LeafTargets& out) {
 
 // This rank's sources across ranks: the particles of the leaves it owns, gas and then dark
 // matter, each in the run's order, named by their index in this rank's arrays (as the walks'
-// targets name them). Where the arrays hold only some leaves (halo mode) a
-// particle's place in the run is its leaf's place plus its offset in the leaf; otherwise its
-// index.
-struct OwnSources {
-  std::vector<Vec3> x;
-  std::vector<double> m, eps;
-  std::vector<std::uint64_t> places;
-  std::vector<std::int32_t> names;
-  RankSources view() const { return {x, m, eps, places, names}; }
-};
-OwnSources own_sources(const StepContext& ctx) {
-  const GasParticles& gas = ctx.gas;
-  const CollisionlessParticles& dm = ctx.dm;
+// targets name them: gas i as i, collisionless j as the gas count + j). Where the arrays hold
+// only some leaves (halo mode) a particle's place in the run is its leaf's place plus its
+// offset in the leaf; otherwise its index. The order is found at each build and kept in the
+// context for the refits (particles keep their places in the arrays until the next rebuild),
+// so a refit only gathers the present positions, masses and softenings.
+void order_own_sources(StepContext& ctx) {
+  const std::size_t n_gas = ctx.gas.size();
   std::vector<std::pair<std::uint64_t, std::size_t>> g;  // (place, index)
   std::vector<std::pair<std::uint64_t, std::size_t>> d;  // (place among the collisionless, index)
   for (const int c : ctx.space.leaves()) {
@@ -86,22 +80,55 @@ OwnSources own_sources(const StepContext& ctx) {
   }
   std::sort(g.begin(), g.end());
   std::sort(d.begin(), d.end());
-  OwnSources s;
+  const std::size_t gas_total = ctx.gas_total ? *ctx.gas_total : n_gas;
+  StepContext::OwnSourceOrder& order = ctx.own_source_order;
+  order = {};
+  order.gas = g.size();
+  order.gas_arrays = n_gas;
+  order.dm_arrays = ctx.dm.size();
+  order.names.reserve(g.size() + d.size());
+  order.places.reserve(g.size() + d.size());
   for (const auto& [place, i] : g) {
-    s.x.push_back(gas.x[i]);
-    s.m.push_back(gas.dynamical_mass(i));
-    s.eps.push_back(ctx.softening_gas());
-    s.places.push_back(place);
-    s.names.push_back(static_cast<std::int32_t>(i));
+    order.places.push_back(place);
+    order.names.push_back(static_cast<std::int32_t>(i));
   }
-  const std::size_t gas_total = ctx.gas_total ? *ctx.gas_total : gas.size();
   for (const auto& [place, i] : d) {
-    s.x.push_back(dm.x[i]);
-    s.m.push_back(dm.mass[i]);
-    s.eps.push_back(ctx.softening_of(i));
-    s.places.push_back(gas_total + place);
-    s.names.push_back(static_cast<std::int32_t>(gas.size() + i));
+    order.places.push_back(gas_total + place);
+    order.names.push_back(static_cast<std::int32_t>(n_gas + i));
   }
+}
+
+struct OwnSources {
+  std::vector<Vec3> x;
+  std::vector<double> m, eps;
+  std::span<const std::uint64_t> places;
+  std::span<const std::int32_t> names;
+  RankSources view() const { return {x, m, eps, places, names}; }
+};
+OwnSources own_sources(const StepContext& ctx) {
+  const GasParticles& gas = ctx.gas;
+  const CollisionlessParticles& dm = ctx.dm;
+  const StepContext::OwnSourceOrder& order = ctx.own_source_order;
+  const std::size_t n = order.names.size();
+  OwnSources s;
+  s.x.resize(n);
+  s.m.resize(n);
+  s.eps.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::size_t>(order.names[k]);
+    if (k < order.gas) {
+      s.x[k] = gas.x[i];
+      s.m[k] = gas.dynamical_mass(i);
+      s.eps[k] = ctx.softening_gas();
+    } else {
+      const std::size_t j = i - order.gas_arrays;
+      s.x[k] = dm.x[j];
+      s.m[k] = dm.mass[j];
+      s.eps[k] = ctx.softening_of(j);
+    }
+  }
+  s.places = order.places;
+  s.names = order.names;
   return s;
 }
 }  // namespace
@@ -113,6 +140,7 @@ const GravityTree& walk_tree(const StepContext& ctx) {
 void build_tree(StepContext& ctx) {
   if (ctx.tree_messages) {
     ctx.tree_across.reset();  // not beside the new one
+    order_own_sources(ctx);
     const OwnSources own = own_sources(ctx);
     ctx.tree_across = std::make_unique<TreeAcrossRanks>(*ctx.tree_messages, own.view(), tree_config(ctx), walk_config(ctx));
     ctx.tree.reset();  // assembled for each step's walks (finish_tree)
@@ -221,7 +249,14 @@ void finish_tree(StepContext& ctx) {
     // step's walks of its own leaves' active particles, assembled with what the other ranks
     // send for them (every step: the walks and the moments change).
     if (ctx.tree_update == StepContext::TreeUpdate::refit)
+    {
+      // The kept order stands while the arrays do (a spawned star or a removed particle brings
+      // a rebuild first; should one not, the order is found anew and the refit reports the
+      // changed count).
+      const StepContext::OwnSourceOrder& order = ctx.own_source_order;
+      if (order.gas_arrays != ctx.gas.size() || order.dm_arrays != ctx.dm.size()) order_own_sources(ctx);
       ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
+    }
     else if (ctx.tree_update == StepContext::TreeUpdate::build)
       build_tree(ctx);
     // Each leaf's targets as a batch's bounds, not held: the walks list them again.

@@ -1,6 +1,8 @@
 // What every task of a step needs: the particles, the cells, the parameters and the clock.
 #pragma once
 #include <atomic>
+#include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <limits>
 
@@ -63,6 +65,15 @@ struct StepContext {
   // ranks"); null when the tree is built whole from every particle.
   std::unique_ptr<gravity::TreeAcrossRanks> tree_across{};
   gravity::TreeMessages* tree_messages = nullptr;
+  // The order in which this rank gives its own particles to tree_across, found at its build:
+  // each source's name (gas index, or the gas arrays' size + collisionless index) and place
+  // in the run; the first `gas` are gas. The arrays' sizes then are kept to check it.
+  struct OwnSourceOrder {
+    std::vector<std::int32_t> names;
+    std::vector<std::uint64_t> places;
+    std::size_t gas = 0, gas_arrays = 0, dm_arrays = 0;
+  };
+  OwnSourceOrder own_source_order{};
   // Whether this rank owns leaf c (its tasks run here); every leaf when alone.
   std::function<bool(int)> owns_leaf = [](int) { return true; };
   // Where each cell's gas starts in the run's order, where this rank's arrays hold only some
