@@ -335,6 +335,31 @@ TEST(GravityTree, NodesSummariseTheirParticles) {
   EXPECT_FALSE(p.tree.loose());
 }
 
+// The room a build reserves for its nodes holds them on the sets a run meets (a lattice of
+// initial conditions, uniform and clustered points), so the array is not doubled while built,
+// and is not more than twice what they need.
+TEST(GravityTree, NodeEstimateHoldsLatticeUniformAndClusteredSets) {
+  const int side = 24;
+  const std::size_t n = static_cast<std::size_t>(side) * side * side;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::normal_distribution<double> g(0.0, 0.03);
+  std::vector<Vec3> lattice, uniform, clustered;
+  for (int i = 0; i < side; ++i)
+    for (int j = 0; j < side; ++j)
+      for (int k = 0; k < side; ++k) lattice.push_back(Vec3{i + 0.5, j + 0.5, k + 0.5} * (1.0 / side));
+  for (std::size_t i = 0; i < n; ++i) uniform.push_back({u(rng), u(rng), u(rng)});
+  for (std::size_t i = 0; i < n; ++i)
+    clustered.push_back(i % 2 ? Vec3{u(rng), u(rng), u(rng)} : Vec3{0.5 + g(rng), 0.5 + g(rng), 0.5 + g(rng)});
+  const std::vector<double> mass(n, 1.0 / static_cast<double>(n)), soft(n, 0.01);
+  for (const auto* set : {&lattice, &uniform, &clustered}) {
+    const GravityTree tree(*set, mass, soft);
+    const std::size_t estimate = GravityTree::node_estimate(n, TreeConfig{}.max_leaf_size);
+    EXPECT_LE(tree.nodes().size(), estimate);
+    EXPECT_GE(2 * tree.nodes().size(), estimate);
+  }
+}
+
 // A refit of the sources the tree was built from changes nothing: the walks between rebuilds
 // start from the same tree a rebuild would give.
 TEST(GravityTree, RefitOfUnmovedSourcesIsTheBuild) {
