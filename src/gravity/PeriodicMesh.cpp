@@ -72,6 +72,8 @@ void for_each_particle(const ForEach& for_each, std::size_t count, Fn&& fn) {
 // (one more above) read.
 constexpr int kGhostBefore = 2;
 constexpr int kGhostAfter = 3;
+// Planes interpolated by one task, which makes the gradient of one plane more than it reads.
+constexpr int kGradientRun = 8;
 
 }  // namespace
 
@@ -144,7 +146,7 @@ double* PeriodicMesh::plane(int local) {
 }
 
 std::size_t PeriodicMesh::bytes() const {
-  return sizeof(std::int64_t) * fixed_.size() + sizeof(double) * (green_.size() + gradient_doubles()) +
+  return sizeof(std::int64_t) * fixed_.size() + sizeof(double) * green_.size() +
          sizeof(double) * (fft_->planes_doubles + fft_->columns_doubles);
 }
 
@@ -456,47 +458,68 @@ void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const 
   const int n = n_, nx = nx_, x0 = x0_;
   const std::size_t row = 2 * static_cast<std::size_t>(n / 2 + 1);
   const double cell_inv = n / box_;
-  // The fourth-order difference of the potential along each axis, once per node of the own
-  // planes and the one above (which the clouds of the top plane reach): each node is read by
-  // the clouds of many particles, and each cloud reads eight nodes' three.
+  // The fourth-order difference of the potential along each axis at the nodes of local plane
+  // l, three per node: each node is read by the clouds of many particles, and each cloud
+  // reads eight nodes' three.
   const auto plane_nodes = static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
-  const std::size_t gradient_planes = nx > 0 ? static_cast<std::size_t>(nx + 1) : 0;  // a rank without planes has none
-  gradient_.resize(gradient_doubles());
-  for_each_or_serial(for_each, gradient_planes, [&](std::size_t l) {
-    const int li = static_cast<int>(l);
+  auto gradient_of = [&](int l, double* out) {
     for (int j = 0; j < n; ++j)
       for (int k = 0; k < n; ++k) {
-        const std::size_t node = l * plane_nodes + static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k);
+        const std::size_t node = static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k);
         for (int d = 0; d < 3; ++d) {
           auto at = [&](int shift) {
-            int ii = li, jj = j, kk = k;
+            int ii = l, jj = j, kk = k;
             (d == 0 ? ii : d == 1 ? jj : kk) += shift;
             return plane(ii)[static_cast<std::size_t>(wrap_index(jj, n)) * row + static_cast<std::size_t>(wrap_index(kk, n))];
           };
-          gradient_[3 * node + static_cast<std::size_t>(d)] = (8.0 * (at(1) - at(-1)) - (at(2) - at(-2))) * (cell_inv / 12.0);
+          out[3 * node + static_cast<std::size_t>(d)] = (8.0 * (at(1) - at(-1)) - (at(2) - at(-2))) * (cell_inv / 12.0);
         }
       }
-  });
+  };
+  if (nx <= 0) return;  // a rank without planes interpolates no particle
+  // The particles by their lower plane (the rank of that plane interpolates them), so that a
+  // run of planes is taken in one task holding the gradient of two planes at a time, not of
+  // the whole slab (three doubles a node, once the largest item of a mesh step's memory).
+  std::vector<std::int32_t> lower(count);
   for_each_particle(for_each, count, [&](std::size_t p) {
-    Vec3 acc;
-    double pot = 0.0;
-    const Cloud cloud = cloud_of(positions[p], box_, cell_inv, n);
-    const int lo = cloud.w[0].lo - x0;
-    if (lo < 0 || lo >= nx) return;  // the rank of its lower plane interpolates it
-    for_each_cloud_node(cloud, n, [&](int i, int j, int k, double weight) {
-      const int local = i == cloud.w[0].lo ? lo : lo + 1;
-      const double* g = &gradient_[3 * (static_cast<std::size_t>(local) * plane_nodes + static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k))];
-      for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
-      pot += weight * plane(local)[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(k)];
-    });
-    store(p, acc, pot + background + self * masses[p]);
+    const int lo = cloud_of(positions[p], box_, cell_inv, n).w[0].lo - x0;
+    lower[p] = lo >= 0 && lo < nx ? lo : nx;
   });
-  // Remade at each mesh step: held between them it would sit in every step's peak of memory.
-  std::vector<double>().swap(gradient_);
-}
-
-std::size_t PeriodicMesh::gradient_doubles() const {
-  return nx_ > 0 ? 3 * static_cast<std::size_t>(n_) * static_cast<std::size_t>(n_) * static_cast<std::size_t>(nx_ + 1) : 0;
+  std::vector<std::size_t> start(static_cast<std::size_t>(nx) + 2, 0);
+  for (const std::int32_t l : lower) ++start[static_cast<std::size_t>(l) + 1];
+  for (std::size_t l = 1; l < start.size(); ++l) start[l] += start[l - 1];
+  std::vector<std::size_t> order(start[static_cast<std::size_t>(nx)]);
+  {
+    std::vector<std::size_t> fill(start.begin(), start.end() - 1);
+    for (std::size_t p = 0; p < count; ++p)
+      if (lower[p] < nx) order[fill[static_cast<std::size_t>(lower[p])]++] = p;
+  }
+  std::vector<std::int32_t>().swap(lower);
+  const int runs = (nx + kGradientRun - 1) / kGradientRun;
+  for_each_or_serial(for_each, static_cast<std::size_t>(runs), [&](std::size_t r) {
+    const int first = static_cast<int>(r) * kGradientRun, end = std::min(nx, first + kGradientRun);
+    std::vector<double> window(2 * 3 * plane_nodes);
+    double* below = window.data();
+    double* above = below + 3 * plane_nodes;
+    gradient_of(first, below);
+    for (int l = first; l < end; ++l) {
+      gradient_of(l + 1, above);  // the top plane's clouds reach the plane above (a ghost for the last)
+      for (std::size_t q = start[static_cast<std::size_t>(l)]; q < start[static_cast<std::size_t>(l) + 1]; ++q) {
+        const std::size_t p = order[q];
+        Vec3 acc;
+        double pot = 0.0;
+        const Cloud cloud = cloud_of(positions[p], box_, cell_inv, n);
+        for_each_cloud_node(cloud, n, [&](int i, int j, int k, double weight) {
+          const bool at_lower = i == cloud.w[0].lo;
+          const double* g = (at_lower ? below : above) + 3 * (static_cast<std::size_t>(j) * n + static_cast<std::size_t>(k));
+          for (int d = 0; d < 3; ++d) acc[d] -= weight * g[d];
+          pot += weight * plane(at_lower ? l : l + 1)[static_cast<std::size_t>(j) * row + static_cast<std::size_t>(k)];
+        });
+        store(p, acc, pot + background + self * masses[p]);
+      }
+      std::swap(below, above);
+    }
+  });
 }
 
 }  // namespace fountain::gravity

@@ -63,8 +63,9 @@ class PeriodicMesh {
   // This rank's x-planes: [first_plane(), first_plane() + planes()).
   int first_plane() const { return x0_; }
   int planes() const { return nx_; }
-  // Bytes of mesh this rank holds while it computes (its planes of density, transform, Green's
-  // function and gradient; the gradient only then): about 1 / ranks of one process's.
+  // Bytes of mesh this rank holds (its planes of density and transform and its Green's
+  // function; the gradient is made two planes at a time per task): about 1 / ranks of one
+  // process's.
   std::size_t bytes() const;
   GravitySplit split() const { return GravitySplit{r_s_}; }
   int cells() const { return n_; }
@@ -99,8 +100,7 @@ class PeriodicMesh {
   double fixed_unit_ = 1.0;  // mass of one fixed-point unit
   std::vector<std::int64_t> fixed_;
   std::vector<double> green_;     // per mode of this rank's y-planes (green_function)
-  std::vector<double> gradient_;  // the potential's mesh gradient, three per node of planes 0 ... planes(), while interpolating
-  std::size_t gradient_doubles() const;
+
   struct Fft;
   std::unique_ptr<Fft> fft_;
 };
