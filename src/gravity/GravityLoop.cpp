@@ -248,17 +248,16 @@ void finish_tree(StepContext& ctx) {
     // Across ranks: this rank's subtrees refitted (or all built anew), then the tree for the
     // step's walks of its own leaves' active particles, assembled with what the other ranks
     // send for them (every step: the walks and the moments change).
-    if (ctx.tree_update == StepContext::TreeUpdate::refit)
-    {
+    if (ctx.tree_update == StepContext::TreeUpdate::refit) {
       // The kept order stands while the arrays do (a spawned star or a removed particle brings
       // a rebuild first; should one not, the order is found anew and the refit reports the
       // changed count).
       const StepContext::OwnSourceOrder& order = ctx.own_source_order;
       if (order.gas_arrays != ctx.gas.size() || order.dm_arrays != ctx.dm.size()) order_own_sources(ctx);
       ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
-    }
-    else if (ctx.tree_update == StepContext::TreeUpdate::build)
+    } else if (ctx.tree_update == StepContext::TreeUpdate::build) {
       build_tree(ctx);
+    }
     // Each leaf's targets as a batch's bounds, not held: the walks list them again.
     std::vector<TargetBatch> batches;
     LeafTargets leaf;
