@@ -406,26 +406,22 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
   deposit(x_in, m_in, range, for_each);
   solve(for_each);
   // Back to each sender, the forces of the particles whose lower plane is here, each
-  // interpolated straight into its record's place.
+  // interpolated straight into its record's place (its offset within its sender's part).
   std::fill(counts.begin(), counts.end(), 0);
+  std::vector<std::size_t> place(x_in.size());
   for (std::size_t k = 0; k < x_in.size(); ++k) {
     const int lo = lower_plane(x_in[k]) - x0_;
-    if (lo >= 0 && lo < nx_) counts[origin[k].first] += sizeof(Back);
+    if (lo < 0 || lo >= nx_) continue;
+    place[k] = counts[origin[k].first];
+    counts[origin[k].first] += sizeof(Back);
   }
   at[0] = 0;
   for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1];
   std::vector<char> back(at.back() + counts.back());
-  std::vector<std::size_t> place(x_in.size());  // where each record goes in `back`
-  for (std::size_t k = 0; k < x_in.size(); ++k) {
-    const int lo = lower_plane(x_in[k]) - x0_;
-    if (lo < 0 || lo >= nx_) continue;
-    place[k] = at[origin[k].first];
-    at[origin[k].first] += sizeof(Back);
-  }
   interpolate(x_in, m_in,
               [&](std::size_t k, const Vec3& a, double phi) {
                 const Back record{origin[k].second, a, phi};
-                std::memcpy(back.data() + place[k], &record, sizeof record);
+                std::memcpy(back.data() + at[origin[k].first] + place[k], &record, sizeof record);
               },
               for_each);
   std::vector<Vec3>().swap(x_in);

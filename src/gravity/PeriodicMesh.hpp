@@ -100,7 +100,6 @@ class PeriodicMesh {
   double fixed_unit_ = 1.0;  // mass of one fixed-point unit
   std::vector<std::int64_t> fixed_;
   std::vector<double> green_;     // per mode of this rank's y-planes (green_function)
-
   struct Fft;
   std::unique_ptr<Fft> fft_;
 };
