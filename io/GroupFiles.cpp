@@ -113,9 +113,10 @@ GroupInput read_group_input(const std::string& path) {
   return in;
 }
 
-void write_fof_catalogue(const std::string& path, const std::vector<groups::Group>& groups, const GroupInput& input,
+void write_fof_catalogue(const std::string& path, const groups::GroupCatalogue& catalogue, const GroupInput& input,
                          const FofCatalogueInfo& info) {
   hdf5::File f(path, hdf5::File::Mode::create);
+  const std::vector<groups::Group>& groups = catalogue.groups;
   const std::size_t n = groups.size();
   std::vector<std::uint64_t> len(n), offset(n), len_type(6 * n), ids, types;
   std::vector<double> mass(n), mass_type(6 * n), m200(n), r200(n);
@@ -136,8 +137,8 @@ void write_fof_catalogue(const std::string& path, const std::vector<groups::Grou
     pos[g] = group.potential_minimum;
     vel[g] = group.velocity;
     for (std::uint32_t i : group.members) {
-      ids.push_back(input.particles.id[i]);
-      member_type.push_back(input.particles.type[i]);
+      ids.push_back(catalogue.member_id[i]);
+      member_type.push_back(catalogue.member_type[i]);
     }
   }
   write_catalogue_header(f, n, ids.size(), input, info.snapshot);

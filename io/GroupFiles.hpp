@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "core/Units.hpp"
+#include "groups/FofAcrossRanks.hpp"
 #include "groups/FofCatalogue.hpp"
 #include "groups/Hop.hpp"
 
@@ -37,11 +38,12 @@ struct FofCatalogueInfo {
   double overdensity = 0.0;  // the mean density within R_200 (internal units, comoving)
 };
 
-// /Header (counts, the snapshot's time, cosmology and units, how the groups were found), /Group
-// (GroupLen, GroupLenType, GroupMass, GroupMassType, GroupCM, GroupPos = the potential
-// minimum, GroupVel, Group_M_Crit200, Group_R_Crit200, GroupOffset) and /IDs (ID and Type of
-// the members, group by group, each group's by type then ID).
-void write_fof_catalogue(const std::string& path, const std::vector<groups::Group>& groups, const GroupInput& input,
+// /Header (counts, the snapshot's time, cosmology and units from `header`, whose particles are
+// not read; how the groups were found), /Group (GroupLen, GroupLenType, GroupMass,
+// GroupMassType, GroupCM, GroupPos = the potential minimum, GroupVel, Group_M_Crit200,
+// Group_R_Crit200, GroupOffset) and /IDs (ID and Type of the members, group by group, each
+// group's by type then ID).
+void write_fof_catalogue(const std::string& path, const groups::GroupCatalogue& catalogue, const GroupInput& header,
                          const FofCatalogueInfo& info);
 
 // What a zoom or a mass function needs of a friends-of-friends catalogue: each group's centre,

@@ -3,6 +3,9 @@
 #include <string>
 #include <vector>
 
+#include "core/Collectives.hpp"
+#include "io/GroupFiles.hpp"
+
 namespace fountain {
 
 struct FofRequest {
@@ -17,6 +20,13 @@ struct FofRequest {
 
 // Finds the groups and writes the catalogue; returns the summary line.
 std::string find_groups(const FofRequest& request);
+// The same for particles that several ranks hold, each its own `mine` (as a run finds them at
+// its outputs); `header` gives the snapshot's time, box, cosmology and units (its particles
+// are not read), `request.snapshot` the name the catalogue records. Every rank calls it; rank
+// 0 writes the catalogue and returns the line, the others an empty string. The catalogue is
+// the one `fountain fof` writes from the snapshot of the same particles.
+std::string find_groups(const FofRequest& request, const groups::ParticleSet& mine, const io::GroupInput& header,
+                        Collectives* ranks);
 
 struct HopRequest {
   std::string snapshot;

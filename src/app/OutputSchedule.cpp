@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "app/Simulation.hpp"
+#include "core/Error.hpp"
 
 namespace fountain {
 
@@ -55,6 +56,39 @@ SnapshotSeries::SnapshotSeries(const RunConfig& config, Engine& engine, Temperat
   if (config.comoving.enabled) info_.cosmology = config.comoving.cosmology;
 }
 
+groups::ParticleSet SnapshotSeries::own_particles() const {
+  // As the snapshot stores them and `fountain fof` reads them back: velocities v' a^-3/2
+  // (GADGET's v_pec / sqrt(a)), then times sqrt(a).
+  const double stored = info_.cosmology ? std::pow(info_.time, -1.5) : 1.0;
+  const double read = info_.cosmology ? std::sqrt(info_.time) : 1.0;
+  const auto [gas, collisionless] = engine_.owned_particles();
+  const GasParticles& g = engine_.gas();
+  const CollisionlessParticles& c = engine_.dark_matter();
+  groups::ParticleSet set;
+  for (std::size_t i : gas) set.push_back(g.x[i], g.v[i] * stored * read, g.mass[i], g.id[i], 0);
+  for (std::size_t i : collisionless)
+    set.push_back(c.x[i], c.v[i] * stored * read, c.mass[i], c.id[i], static_cast<int>(c.species[i]));
+  return set;
+}
+
+io::GroupInput SnapshotSeries::group_header() const {
+  io::GroupInput h;
+  const Vec3& box = info_.box_size;
+  if (box.y != box.x || box.z != box.x)
+    throw InputError("output.fof_groups: the group finders need a cubic box (space.box_size)");
+  h.box = box.x;
+  h.time = info_.time;
+  h.units = info_.units;
+  if (info_.cosmology) {
+    h.omega_m = info_.cosmology->omega_m;
+    h.omega_lambda = info_.cosmology->omega_lambda;
+    h.hubble_param = info_.cosmology->hubble_param;
+    h.omega_b = info_.cosmology->omega_b;
+  }
+  h.cosmological = h.omega_m > 0.0 && h.time > 0.0;
+  return h;
+}
+
 void SnapshotSeries::write() {
   engine_.drift_all();
   info_.time = engine_.time();
@@ -87,26 +121,26 @@ void SnapshotSeries::write() {
       fmt::print(stderr, "snapshot {} at t = {:.6g}\n", path, info_.time);
     }
   }
-  // Groups found in the snapshot just written, as `fountain fof` and `fountain hop` would.
+  // Groups of the particles just written, as `fountain fof` and `fountain hop` would find
+  // them in the snapshot: friends-of-friends on every rank's own particles, HOP on rank 0 from
+  // the snapshot.
   const OutputConfig& out = config_.output;
-  if (engine_.rank() == 0 && (out.fof_groups || out.hop_groups)) {
-    if (out.fof_groups) {
-      FofRequest fof;
-      fof.snapshot = path;
-      fof.output = fmt::format("{}/fof_{:04d}.hdf5", out.directory, written_);
-      fof.threads = config_.threads;
-      const std::string line = find_groups(fof);
-      if (!quiet_) fmt::print(stderr, "{}\n", line);
-    }
-    if (out.hop_groups && engine_.gas_count() + counts.stars > 0) {
-      HopRequest hop;
-      hop.snapshot = path;
-      hop.output = fmt::format("{}/hop_{:04d}.hdf5", out.directory, written_);
-      hop.omega_b = config_.comoving.cosmology.omega_b;
-      hop.threads = config_.threads;
-      const std::string line = find_hop_groups(hop);
-      if (!quiet_) fmt::print(stderr, "{}\n", line);
-    }
+  if (out.fof_groups) {
+    FofRequest fof;
+    fof.snapshot = path;
+    fof.output = fmt::format("{}/fof_{:04d}.hdf5", out.directory, written_);
+    fof.threads = config_.threads;
+    const std::string line = find_groups(fof, own_particles(), group_header(), engine_.collectives());
+    if (!quiet_ && engine_.rank() == 0) fmt::print(stderr, "{}\n", line);
+  }
+  if (engine_.rank() == 0 && out.hop_groups && engine_.gas_count() + counts.stars > 0) {
+    HopRequest hop;
+    hop.snapshot = path;
+    hop.output = fmt::format("{}/hop_{:04d}.hdf5", out.directory, written_);
+    hop.omega_b = config_.comoving.cosmology.omega_b;
+    hop.threads = config_.threads;
+    const std::string line = find_hop_groups(hop);
+    if (!quiet_) fmt::print(stderr, "{}\n", line);
   }
   ++written_;
 }

@@ -5,6 +5,7 @@
 
 #include "analysis/Diagnostics.hpp"
 #include "engine/Engine.hpp"
+#include "io/GroupFiles.hpp"
 #include "io/Snapshot.hpp"
 #include "io/StatisticsFile.hpp"
 
@@ -45,6 +46,11 @@ class SnapshotSeries {
   int written() const { return written_; }
 
  private:
+  // This rank's own particles as the group finders read them from a snapshot, and the
+  // snapshot's header as they read it.
+  groups::ParticleSet own_particles() const;
+  io::GroupInput group_header() const;
+
   const RunConfig& config_;
   Engine& engine_;
   io::SnapshotInfo info_;

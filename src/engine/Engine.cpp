@@ -20,7 +20,7 @@
 #include "domain/BoundsAcrossRanks.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
-#include "engine/TreeMessagesOverRanks.hpp"
+#include "engine/CollectivesOverRanks.hpp"
 #include "gravity/GravityLoop.hpp"
 #include "gravity/GravityTasks.hpp"
 #include "gravity/LongRangeForce.hpp"
@@ -119,9 +119,9 @@ Engine::Engine(const RunConfig& config, GasParticles gas, CollisionlessParticles
     throw std::logic_error("a rank read a share of the gas, but this run keeps every particle on every rank");
   // Each rank builds the tree of its own leaves' particles and assembles each step's tree
   // from it and what the other ranks send for its walks (docs/gravity.md, "Across ranks").
+  if (ranks_) collectives_ = std::make_unique<CollectivesOverRanks>(*ranks_);
   if (ranks_ && config_.gravity.enabled && (config_.assemble_gravity_tree || layout_.halo_mode())) {
-    tree_messages_ = std::make_unique<TreeMessagesOverRanks>(*ranks_);
-    ctx_->tree_messages = tree_messages_.get();
+    ctx_->tree_messages = collectives_.get();
     if (layout_.halo_mode()) {
       ctx_->leaf_places = &run_first_;
       ctx_->leaf_dm_places = &run_dm_first_;

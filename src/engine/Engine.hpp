@@ -34,7 +34,8 @@ struct FeedbackState;
 namespace domain {
 class RankExchange;
 }
-class TreeMessagesOverRanks;
+class Collectives;
+class CollectivesOverRanks;
 
 // Sums over all particles (gas at predicted values), for conservation checks.
 struct Totals {
@@ -175,6 +176,8 @@ class Engine {
   // Every rank's value, in rank order (this rank's alone when running alone); every rank
   // must call it.
   std::vector<double> from_every_rank(double mine) const;
+  // The ranks' collectives for work spread over them (the group finders), or null when alone.
+  Collectives* collectives() const;
   // How often the cut of the leaves between ranks was chosen.
   int partitions() const { return layout_.partitions(); }
   // Wall seconds since the start: in the task graphs, and in the exchanges after them
@@ -379,7 +382,7 @@ class Engine {
   bool record_timeline_ = false;
 
   std::unique_ptr<domain::RankExchange> ranks_;   // null when running alone
-  std::unique_ptr<TreeMessagesOverRanks> tree_messages_;  // the gravity tree's, across ranks
+  std::unique_ptr<CollectivesOverRanks> collectives_;  // the gravity tree's and the group finders', across ranks
   int gravity_tree_type_ = -1;  // the gravity tree task's type (-1: no gravity)
   TreeAssembly tree_assembly_;
   domain::RankLayout layout_;               // who owns and who keeps each leaf

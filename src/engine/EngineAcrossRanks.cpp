@@ -10,6 +10,7 @@
 #include "domain/DomainDecomposition.hpp"
 #include "domain/RankExchange.hpp"
 #include "engine/CellMessages.hpp"
+#include "engine/CollectivesOverRanks.hpp"
 #include "engine/Engine.hpp"
 #include "feedback/FeedbackLoop.hpp"
 
@@ -101,6 +102,7 @@ std::vector<double> Engine::from_every_rank(double mine) const {
   for (const auto& theirs : ranks_->allgather_values(std::span<const double>(&mine, 1), "one value")) out.push_back(theirs[0]);
   return out;
 }
+Collectives* Engine::collectives() const { return collectives_.get(); }
 std::uint64_t Engine::bytes_sent() const { return ranks_ ? ranks_->traffic().bytes : 0; }
 std::uint64_t Engine::messages_sent() const { return ranks_ ? ranks_->traffic().messages : 0; }
 std::uint64_t Engine::ghost_bytes_sent() const { return ranks_ ? ranks_->traffic().point_to_point_bytes : 0; }

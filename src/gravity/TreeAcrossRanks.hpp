@@ -5,23 +5,14 @@
 #include <span>
 #include <vector>
 
+#include "core/Collectives.hpp"
 #include "core/Vec3.hpp"
 #include "gravity/GravityTree.hpp"
 
 namespace fountain::gravity {
 
-// What assembling the tree needs of the ranks: every rank calls each collective, in the same
-// order. domain::RankExchange provides them for MPI runs; tests run ranks as threads.
-class TreeMessages {
- public:
-  virtual ~TreeMessages() = default;
-  virtual int rank() const = 0;
-  virtual int size() const = 0;
-  // Every rank's buffer, indexed by rank (this rank's own included).
-  virtual std::vector<std::vector<char>> allgather(std::span<const char> mine) = 0;
-  // to[q] goes to rank q (this rank's own is not sent): what each rank sent to this one.
-  virtual std::vector<std::vector<char>> alltoall(const std::vector<std::vector<char>>& to) = 0;
-};
+// What assembling the tree needs of the ranks (core/Collectives.hpp).
+using TreeMessages = Collectives;
 
 // One rank's sources: its share of the run's sources, in the run's order (the order one
 // rank's tree takes its sources in: within a leaf, and so in every sum, sources follow it).

@@ -2,6 +2,8 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "core/Vec3.hpp"
@@ -47,10 +49,12 @@ double linking_length(double b, double mean_mass, double mean_density);
 
 // Groups of at least min_members primaries linked at the linking length (nearest images when
 // periodic); each particle of another type joins the group of its nearest primary closer than
-// the linking length. Each group's potential minimum is found on its own members' potential
-// (a tree walk on the group alone, softened by `softening`), and M_200, R_200 are the mass and
-// radius within which the mean density of all particles about that centre is `overdensity`.
-// Ordered by mass, ties by the smallest member ID. The same for any thread count.
+// the linking length (ties to the smaller ID). Each group's members are taken by type, then
+// ID: its potential minimum is found on their own potential (a tree walk on the group alone,
+// softened by `softening`; ties to the first), and M_200, R_200 are the mass and radius within
+// which the mean density of all particles about that centre is `overdensity`. Ordered by mass,
+// ties by the smallest member ID. The same for any thread count or order of the particles
+// (find_fof_groups_across_ranks alone).
 std::vector<Group> find_fof_groups(const ParticleSet& particles, const FofParameters& p);
 
 // The radius about `centre` within which the mean density of `grid`'s particles first falls
@@ -62,5 +66,10 @@ struct SphericalOverdensity {
 };
 SphericalOverdensity spherical_overdensity(const PointGrid& grid, const ParticleSet& particles, const Vec3& centre,
                                            double density, double start_radius);
+// The same from the (r, m) of every particle within `radius` of the centre, sorted: the
+// answer, or nothing when the mean density is still above the threshold (shell = 4 pi
+// density / 3) at `radius` < `limit`. The answer does not depend on `radius` once there is one.
+std::optional<SphericalOverdensity> overdensity_crossing(const std::vector<std::pair<double, double>>& inside, double radius,
+                                                         double limit, double shell);
 
 }  // namespace fountain::groups

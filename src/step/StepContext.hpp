@@ -20,13 +20,13 @@ namespace fountain {
 // The physics modules' settings and state, below which this layer sits: named, not included.
 struct HydroParams;
 struct GravityParams;
+class Collectives;
 namespace cooling {
 class RadiativeCooling;
 }
 namespace gravity {
 class GravityTree;
 class TreeAcrossRanks;
-class TreeMessages;
 struct LongRangeForce;
 }
 
@@ -64,7 +64,7 @@ struct StepContext {
   // refits, and the messages that assemble each step's tree from it (docs/gravity.md, "Across
   // ranks"); null when the tree is built whole from every particle.
   std::unique_ptr<gravity::TreeAcrossRanks> tree_across{};
-  gravity::TreeMessages* tree_messages = nullptr;
+  Collectives* tree_messages = nullptr;
   // The order in which this rank gives its own particles to tree_across, found at its build:
   // each source's name (gas index, or the gas arrays' size + collisionless index) and place
   // in the run; the first `gas` are gas. The arrays' sizes then are kept to check it.

@@ -1,15 +1,15 @@
-// The gravity tree's collectives across ranks (gravity::TreeMessages) carried by the run's RankExchange.
+// The collectives of work spread over ranks (the gravity tree's assembly, the group finders) carried by the run's RankExchange.
 #pragma once
 #include <vector>
 
 #include "domain/RankExchange.hpp"
-#include "gravity/TreeAcrossRanks.hpp"
+#include "core/Collectives.hpp"
 
 namespace fountain {
 
-class TreeMessagesOverRanks : public gravity::TreeMessages {
+class CollectivesOverRanks : public Collectives {
  public:
-  explicit TreeMessagesOverRanks(domain::RankExchange& ranks) : ranks_(ranks) {}
+  explicit CollectivesOverRanks(domain::RankExchange& ranks) : ranks_(ranks) {}
   int rank() const override { return ranks_.rank(); }
   int size() const override { return ranks_.size(); }
   std::vector<std::vector<char>> allgather(std::span<const char> mine) override {

@@ -1,0 +1,538 @@
+#include "groups/FofAcrossRanks.hpp"
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <span>
+#include <stdexcept>
+#include <tuple>
+#include <type_traits>
+#include <unordered_map>
+#include <unordered_set>
+#include <utility>
+
+#include "core/Error.hpp"
+#include "core/PeriodicWrap.hpp"
+#include "gravity/GravityTree.hpp"
+#include "groups/FriendsOfFriends.hpp"
+
+namespace fountain::groups {
+
+namespace {
+
+// One particle on its way between ranks; `origin` is its index in its first rank's set.
+struct Record {
+  Vec3 x, v;
+  double m = 0.0;
+  std::uint64_t id = 0, origin = 0;
+  std::int32_t type = 0, pad = 0;
+};
+
+template <class T>
+std::vector<char> bytes_of(const std::vector<T>& v) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::vector<char> out(v.size() * sizeof(T));
+  if (!v.empty()) std::memcpy(out.data(), v.data(), out.size());
+  return out;
+}
+
+template <class T>
+void append_from(std::span<const char> bytes, std::vector<T>& out) {
+  if (bytes.size() % sizeof(T) != 0) throw std::logic_error("friends-of-friends: a message of the wrong length");
+  const std::size_t n = bytes.size() / sizeof(T), at = out.size();
+  out.resize(at + n);
+  if (n > 0) std::memcpy(static_cast<void*>(out.data() + at), bytes.data(), bytes.size());
+}
+
+// Every rank's values, one after the other in rank order.
+template <class T>
+std::vector<T> gather_all(const std::vector<T>& mine, Collectives* ranks) {
+  if (ranks == nullptr) return mine;
+  std::vector<T> all;
+  for (const auto& b : ranks->allgather(bytes_of(mine))) append_from<T>(b, all);
+  return all;
+}
+
+// to[q] goes to rank q; what every rank sent this one, in rank order (its own to[me] in place).
+template <class T>
+std::vector<T> exchange(std::vector<std::vector<T>>& to, Collectives* ranks) {
+  if (ranks == nullptr) return std::move(to[0]);
+  const int me = ranks->rank();
+  std::vector<std::vector<char>> out(to.size());
+  for (std::size_t q = 0; q < to.size(); ++q)
+    if (static_cast<int>(q) != me) {
+      out[q] = bytes_of(to[q]);
+      std::vector<T>().swap(to[q]);
+    }
+  const std::vector<std::vector<char>> in = ranks->alltoall(out);
+  std::vector<T> arrived;
+  for (std::size_t q = 0; q < to.size(); ++q) {
+    if (static_cast<int>(q) == me) arrived.insert(arrived.end(), to[q].begin(), to[q].end());
+    else append_from<T>(in[q], arrived);
+  }
+  return arrived;
+}
+
+// b - a as the nearest periodic image (as PointGrid::separation).
+Vec3 separation(const Vec3& a, const Vec3& b, double box) {
+  Vec3 d = b - a;
+  if (box > 0.0)
+    for (int k = 0; k < 3; ++k) {
+      if (d[k] > 0.5 * box) d[k] -= box;
+      else if (d[k] < -0.5 * box) d[k] += box;
+    }
+  return d;
+}
+
+Vec3 folded(const Vec3& x, double box) { return box > 0.0 ? wrap_into_box(x, Vec3{box, box, box}) : x; }
+
+// Slabs of x with equal particle counts (to a 4096th of the box), one per rank, cut from a
+// histogram summed over the ranks: the same slabs however the particles are spread.
+class Slabs {
+ public:
+  Slabs(const std::vector<Record>& mine, double box, Collectives* ranks) : box_(box) {
+    const int count = ranks == nullptr ? 1 : ranks->size();
+    if (box > 0.0) {
+      lo_ = 0.0, width_ = box;
+    } else {
+      std::vector<double> bounds{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+      for (const Record& r : mine) bounds[0] = std::min(bounds[0], r.x.x), bounds[1] = std::max(bounds[1], r.x.x);
+      const std::vector<double> all = gather_all(bounds, ranks);
+      double lo = all[0], hi = all[1];
+      for (std::size_t k = 0; k < all.size(); k += 2) lo = std::min(lo, all[k]), hi = std::max(hi, all[k + 1]);
+      lo_ = std::isfinite(lo) ? lo : 0.0;
+      width_ = std::isfinite(hi) && hi > lo ? hi - lo : 1.0;
+    }
+    std::vector<std::uint64_t> histogram(kBins, 0);
+    for (const Record& r : mine) ++histogram[static_cast<std::size_t>(bin(r.x.x))];
+    const std::vector<std::uint64_t> all = gather_all(histogram, ranks);
+    std::vector<std::uint64_t> total(kBins, 0);
+    for (std::size_t k = 0; k < all.size(); ++k) total[k % kBins] += all[k];
+    std::uint64_t n = 0;
+    for (std::uint64_t c : total) n += c;
+    slab_of_bin_.resize(kBins);
+    first_bin_.assign(static_cast<std::size_t>(count) + 1, kBins);
+    std::uint64_t before = 0;
+    for (int b = 0; b < kBins; ++b) {
+      const int s = n == 0 ? 0 : static_cast<int>(std::min<std::uint64_t>(count - 1, before * static_cast<std::uint64_t>(count) / n));
+      slab_of_bin_[static_cast<std::size_t>(b)] = s;
+      first_bin_[static_cast<std::size_t>(s)] = std::min(first_bin_[static_cast<std::size_t>(s)], b);
+      before += total[static_cast<std::size_t>(b)];
+    }
+    // Slabs given no bin are empty: they start where the next one does.
+    for (int s = count - 1; s >= 0; --s)
+      first_bin_[static_cast<std::size_t>(s)] = std::min(first_bin_[static_cast<std::size_t>(s)], first_bin_[static_cast<std::size_t>(s) + 1]);
+  }
+
+  int of(double x) const { return slab_of_bin_[static_cast<std::size_t>(bin(x))]; }
+
+  // Whether x lies within `reach` of slab q (nearest images when periodic).
+  bool near(double x, int q, double reach) const {
+    const int b0 = first_bin_[static_cast<std::size_t>(q)], b1 = first_bin_[static_cast<std::size_t>(q) + 1];
+    if (b0 == b1) return false;  // empty
+    const double a = lo_ + width_ * b0 / kBins, b = lo_ + width_ * b1 / kBins;
+    const double xf = box_ > 0.0 ? wrap_into_box(x, box_) : x;
+    if (xf >= a && xf <= b) return true;
+    if (box_ > 0.0) {
+      auto ahead = [&](double d) { return d - box_ * std::floor(d / box_); };
+      return std::min(ahead(a - xf), ahead(xf - b)) < reach;
+    }
+    return (xf < a ? a - xf : xf - b) < reach;
+  }
+
+ private:
+  static constexpr int kBins = 4096;
+  int bin(double x) const {
+    const double xf = box_ > 0.0 ? wrap_into_box(x, box_) : x;
+    const double b = std::floor((xf - lo_) / width_ * kBins);
+    return static_cast<int>(std::clamp(b, 0.0, static_cast<double>(kBins - 1)));
+  }
+  double box_ = 0.0, lo_ = 0.0, width_ = 1.0;
+  std::vector<int> slab_of_bin_, first_bin_;
+};
+
+// Union-find over particle IDs: a set's root is its smallest ID, whatever the order of the unions.
+class IdUnion {
+ public:
+  std::uint64_t find(std::uint64_t a) {
+    std::uint64_t r = a;
+    for (auto it = parent_.find(r); it != parent_.end() && it->second != r; it = parent_.find(r)) r = it->second;
+    while (a != r) {  // path compression
+      auto it = parent_.find(a);
+      a = std::exchange(it->second, r);
+    }
+    return r;
+  }
+  void unite(std::uint64_t a, std::uint64_t b) {
+    a = find(a), b = find(b);
+    if (a > b) std::swap(a, b);
+    parent_.try_emplace(a, a);
+    if (b != a) parent_[b] = a;
+  }
+  bool contains(std::uint64_t a) const { return parent_.count(a) != 0; }
+
+ private:
+  std::unordered_map<std::uint64_t, std::uint64_t> parent_;
+};
+
+// The member of least potential (ties: the first), from the group's own gravity.
+std::size_t potential_minimum(const std::vector<Vec3>& local, const std::vector<double>& mass, double softening, double G) {
+  if (local.size() == 1) return 0;
+  const std::vector<double> soft(local.size(), softening);
+  const gravity::GravityTree tree(local, mass, soft);
+  std::vector<gravity::GravityTarget> targets(local.size());
+  for (std::size_t k = 0; k < local.size(); ++k)
+    targets[k] = {local[k], softening, gravity::kNoOldAcceleration, static_cast<std::int64_t>(k)};
+  std::vector<gravity::GravityResult> results(local.size());
+  gravity::WalkConfig walk;
+  walk.G = G;
+  walk.theta = 0.5;
+  tree.accelerate(targets, walk, results);
+  std::size_t best = 0;
+  for (std::size_t k = 1; k < local.size(); ++k)
+    if (results[k].potential < results[best].potential) best = k;
+  return best;
+}
+
+// A group's members (by type, then ID), with what the catalogue needs of them.
+struct Member {
+  std::uint64_t group = 0;  // its smallest primary ID
+  Record r;
+};
+
+// A group as found on its home rank, for rank 0.
+struct GroupSummary {
+  double mass = 0.0;
+  std::array<double, 6> mass_by_type{};
+  std::array<std::uint64_t, 6> count_by_type{};
+  Vec3 centre_of_mass, potential_minimum, velocity;
+  double m200 = 0.0, r200 = 0.0;
+  std::uint64_t smallest_id = 0, members = 0;
+};
+
+struct MemberName {
+  std::uint64_t id = 0, origin = 0;
+  std::int32_t type = 0, pad = 0;
+};
+
+// A spherical overdensity's question to every rank: its particles within `radius` of `centre`.
+struct ShellQuery {
+  Vec3 centre;
+  double radius = 0.0;
+  std::uint64_t slot = 0;  // the group's place on its home rank
+  std::int32_t home = 0, pad = 0;
+};
+struct ShellAnswer {
+  std::uint64_t slot = 0;
+  double r = 0.0, m = 0.0;
+};
+
+}  // namespace
+
+double sum_in_any_order(const std::vector<double>& mine, Collectives* ranks) {
+  double largest = 0.0;
+  for (double v : mine) {
+    if (!(v >= 0.0) || !std::isfinite(v)) throw std::invalid_argument("sum_in_any_order: a negative or non-finite value");
+    largest = std::max(largest, v);
+  }
+  for (double v : gather_all(std::vector<double>{largest}, ranks)) largest = std::max(largest, v);
+  if (largest == 0.0) return 0.0;
+  const double scale = std::ldexp(1.0, 62) / largest;
+  unsigned __int128 sum = 0;
+  for (double v : mine) sum += static_cast<std::uint64_t>(std::nearbyint(v * scale));
+  const std::vector<std::uint64_t> halves{static_cast<std::uint64_t>(sum >> 64), static_cast<std::uint64_t>(sum)};
+  const std::vector<std::uint64_t> all = gather_all(halves, ranks);
+  unsigned __int128 total = 0;
+  for (std::size_t k = 0; k < all.size(); k += 2) total += (static_cast<unsigned __int128>(all[k]) << 64) | all[k + 1];
+  return static_cast<double>(total) / scale;
+}
+
+std::uint64_t count_over_ranks(std::uint64_t mine, Collectives* ranks) {
+  std::uint64_t total = 0;
+  for (std::uint64_t n : gather_all(std::vector<std::uint64_t>{mine}, ranks)) total += n;
+  return total;
+}
+
+GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofParameters& p, Collectives* ranks) {
+  if (!(p.linking_length > 0.0)) throw InputError("friends-of-friends needs a positive linking length");
+  const int count = ranks == nullptr ? 1 : ranks->size(), me = ranks == nullptr ? 0 : ranks->rank();
+  const double l = p.linking_length, box = p.box;
+  auto primary_type = [&](int t) { return std::find(p.linking_types.begin(), p.linking_types.end(), t) != p.linking_types.end(); };
+
+  // Each particle to the owner of its slab; a slab's particles by ID.
+  std::vector<Record> own(mine.size());
+  for (std::size_t i = 0; i < mine.size(); ++i)
+    own[i] = {mine.x[i], mine.v[i], mine.mass[i], mine.id[i], static_cast<std::uint64_t>(i), mine.type[i], 0};
+  const Slabs slabs(own, box, ranks);
+  if (ranks != nullptr) {
+    std::vector<std::vector<Record>> to(static_cast<std::size_t>(count));
+    for (const Record& r : own) to[static_cast<std::size_t>(slabs.of(r.x.x))].push_back(r);
+    std::vector<Record>().swap(own);
+    own = exchange(to, ranks);
+  }
+  std::sort(own.begin(), own.end(), [](const Record& a, const Record& b) { return std::tie(a.id, a.origin) < std::tie(b.id, b.origin); });
+
+  // Copies of the primaries within a linking length of another slab go to its owner (with a
+  // margin: a copy too many links nothing that is not linked anyway).
+  std::vector<char> exported(own.size(), 0);
+  std::vector<Record> copies;
+  if (ranks != nullptr) {
+    const double reach = l * (1.0 + 1e-6);
+    std::vector<std::vector<Record>> to(static_cast<std::size_t>(count));
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      if (!primary_type(own[k].type)) continue;
+      for (int q = 0; q < count; ++q)
+        if (q != me && slabs.near(own[k].x.x, q, reach)) {
+          to[static_cast<std::size_t>(q)].push_back(own[k]);
+          exported[k] = 1;
+        }
+    }
+    copies = exchange(to, ranks);
+  }
+
+  // The primaries linked here, own and copies, by ID: the root of a component is then its
+  // smallest ID, and the nearest-primary ties go to the smaller ID, as on one rank.
+  struct Linked {
+    std::uint64_t id, origin;
+    std::uint32_t at;  // in own, or in copies
+    bool copy;
+  };
+  std::vector<Linked> linked;
+  for (std::size_t k = 0; k < own.size(); ++k)
+    if (primary_type(own[k].type)) linked.push_back({own[k].id, own[k].origin, static_cast<std::uint32_t>(k), false});
+  for (std::size_t k = 0; k < copies.size(); ++k) linked.push_back({copies[k].id, copies[k].origin, static_cast<std::uint32_t>(k), true});
+  std::sort(linked.begin(), linked.end(),
+            [](const Linked& a, const Linked& b) { return std::tie(a.id, a.copy, a.origin) < std::tie(b.id, b.copy, b.origin); });
+  std::vector<Vec3> px(linked.size());
+  for (std::size_t k = 0; k < linked.size(); ++k) px[k] = linked[k].copy ? copies[linked[k].at].x : own[linked[k].at].x;
+  const PointGrid grid(px, l, box);
+  const std::vector<std::uint32_t> root = link_friends(grid, px, l);
+
+  // Components joined across slabs: every copy, and every primary copied elsewhere, ties its
+  // ID to its component's label (smallest ID) here; the union over all ranks is the same on each.
+  IdUnion joins;
+  if (ranks != nullptr) {
+    std::vector<std::array<std::uint64_t, 2>> ties;
+    for (std::size_t k = 0; k < linked.size(); ++k)
+      if (linked[k].copy || exported[linked[k].at]) ties.push_back({linked[k].id, linked[root[k]].id});
+    for (const auto& [a, b] : gather_all(ties, ranks)) joins.unite(a, b);
+  }
+  std::vector<std::uint64_t> label(linked.size());
+  for (std::size_t k = 0; k < linked.size(); ++k) label[k] = joins.find(linked[root[k]].id);
+
+  // Primaries per group over every rank. A label the joins never met is a component this
+  // rank holds whole; the others' counts are summed, and their home is the rank that owns
+  // the label's particle.
+  std::unordered_map<std::uint64_t, std::uint64_t> primaries;
+  std::unordered_set<std::uint64_t> own_labels;  // labels whose particle is this rank's
+  for (std::size_t k = 0; k < linked.size(); ++k)
+    if (!linked[k].copy) {
+      ++primaries[label[k]];
+      if (label[k] == linked[k].id) own_labels.insert(label[k]);
+    }
+  struct Share {
+    std::uint64_t label, primaries;
+    std::int64_t home;  // this rank where it owns the label's particle, else -1
+  };
+  std::vector<Share> shares;
+  for (const auto& [g, n] : primaries)
+    if (joins.contains(g)) shares.push_back({g, n, own_labels.count(g) != 0 ? me : -1});
+  std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) { return a.label < b.label; });
+  std::unordered_map<std::uint64_t, std::pair<std::uint64_t, int>> shared;  // label: (primaries, home)
+  for (const Share& s : gather_all(shares, ranks)) {
+    auto& [n, home] = shared.try_emplace(s.label, 0, -1).first->second;
+    n += s.primaries;
+    if (s.home >= 0) home = static_cast<int>(s.home);
+  }
+  // (primaries, home) of the group labelled g.
+  auto group_of = [&](std::uint64_t g) -> std::pair<std::uint64_t, int> {
+    if (const auto it = shared.find(g); it != shared.end()) return it->second;
+    return {primaries.at(g), me};
+  };
+
+  // Every member to its group's home: primaries by their label, the others by the label of
+  // their nearest primary within the linking length (own or copied: it is within l of this slab).
+  std::vector<std::uint64_t> group_label(own.size(), 0);
+  std::vector<char> in_group(own.size(), 0);
+  for (std::size_t k = 0; k < linked.size(); ++k)
+    if (!linked[k].copy) group_label[linked[k].at] = label[k], in_group[linked[k].at] = 1;
+  {
+    std::vector<std::uint32_t> others;
+    std::vector<Vec3> ox;
+    for (std::size_t k = 0; k < own.size(); ++k)
+      if (!primary_type(own[k].type)) others.push_back(static_cast<std::uint32_t>(k)), ox.push_back(own[k].x);
+    const std::vector<std::int64_t> host = nearest_within(grid, px, ox, l);
+    for (std::size_t q = 0; q < others.size(); ++q)
+      if (host[q] >= 0) group_label[others[q]] = label[static_cast<std::size_t>(host[q])], in_group[others[q]] = 1;
+  }
+  std::vector<std::vector<Member>> to(static_cast<std::size_t>(count));
+  for (std::size_t k = 0; k < own.size(); ++k) {
+    if (!in_group[k]) continue;
+    const auto [n, home] = group_of(group_label[k]);
+    if (n >= p.min_members) to[static_cast<std::size_t>(home)].push_back({group_label[k], own[k]});
+  }
+  std::vector<Member> members = exchange(to, ranks);
+  std::sort(members.begin(), members.end(), [](const Member& a, const Member& b) {
+    return std::tie(a.group, a.r.type, a.r.id, a.r.origin) < std::tie(b.group, b.r.type, b.r.id, b.r.origin);
+  });
+  std::vector<std::size_t> first;  // each home group's members: [first[g], first[g + 1])
+  for (std::size_t k = 0; k < members.size(); ++k)
+    if (k == 0 || members[k].group != members[k - 1].group) first.push_back(k);
+  const std::size_t homed = first.size();
+  first.push_back(members.size());
+
+  // Each home group's mass, centres and velocity, on its members' own potential.
+  std::vector<GroupSummary> summary(homed);
+  std::vector<double> extent(homed, 0.0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, homed, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+    for (std::size_t g = range.begin(); g != range.end(); ++g) {
+      GroupSummary& s = summary[g];
+      const std::size_t n = first[g + 1] - first[g];
+      auto at = [&](std::size_t k) -> const Record& { return members[first[g] + k].r; };
+      const Vec3 reference = at(0).x;
+      std::vector<Vec3> local(n);
+      std::vector<double> mass(n);
+      Vec3 moment{}, momentum{};
+      s.smallest_id = at(0).id;
+      for (std::size_t k = 0; k < n; ++k) {
+        const Record& r = at(k);
+        local[k] = box > 0.0 ? separation(reference, r.x, box) : r.x - reference;
+        mass[k] = r.m;
+        s.mass += mass[k];
+        const auto t = static_cast<std::size_t>(std::clamp(r.type, 0, 5));
+        s.mass_by_type[t] += mass[k];
+        ++s.count_by_type[t];
+        moment += local[k] * mass[k];
+        momentum += r.v * mass[k];
+        s.smallest_id = std::min(s.smallest_id, r.id);
+      }
+      s.members = n;
+      s.centre_of_mass = folded(reference + moment * (1.0 / s.mass), box);
+      s.velocity = momentum * (1.0 / s.mass);
+      const std::size_t centre = potential_minimum(local, mass, p.softening, p.G);
+      s.potential_minimum = folded(reference + local[centre], box);
+      for (const Vec3& x : local) extent[g] = std::max(extent[g], norm(x - local[centre]));
+    }
+  });
+
+  // M_200 about the potential minimum, from every rank's particles about it, in rounds of
+  // doubling radii until each group's mean density has fallen to the threshold.
+  if (p.overdensity > 0.0) {
+    const double limit = box > 0.0 ? 0.5 * box : std::numeric_limits<double>::infinity();
+    const double shell = 4.0 / 3.0 * std::numbers::pi * p.overdensity;
+    std::vector<double> radius(homed);
+    std::vector<char> done(homed, 0);
+    for (std::size_t g = 0; g < homed; ++g) radius[g] = std::min(std::max(extent[g], 2.0 * l), limit);
+    std::vector<Vec3> x(own.size());
+    for (std::size_t k = 0; k < own.size(); ++k) x[k] = own[k].x;
+    const PointGrid all(x, 2.0 * l, box);
+    for (;;) {
+      std::vector<ShellQuery> asked;
+      for (std::size_t g = 0; g < homed; ++g)
+        if (!done[g]) asked.push_back({summary[g].potential_minimum, radius[g], g, me, 0});
+      const std::vector<ShellQuery> queries = gather_all(asked, ranks);
+      if (queries.empty()) break;
+      // Each query's particles here, then to the query's home.
+      std::vector<std::vector<ShellAnswer>> found(queries.size());
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t q = range.begin(); q != range.end(); ++q) {
+          const ShellQuery& query = queries[q];
+          const int reach = static_cast<int>(std::ceil(query.radius / all.cell_size()));
+          all.for_each_cell_near(all.cell_of(query.centre), reach, [&](std::size_t c) {
+            const PointGrid::Cell& cell = all.cells()[c];
+            for (std::uint32_t i = cell.first; i < cell.first + cell.count; ++i) {
+              const std::uint32_t j = all.order()[i];
+              const double r = norm(all.separation(query.centre, x[j]));
+              if (r <= query.radius) found[q].push_back({query.slot, r, own[j].m});
+            }
+          });
+        }
+      });
+      std::vector<std::vector<ShellAnswer>> answers(static_cast<std::size_t>(count));
+      for (std::size_t q = 0; q < queries.size(); ++q) {
+        auto& out = answers[static_cast<std::size_t>(queries[q].home)];
+        out.insert(out.end(), found[q].begin(), found[q].end());
+      }
+      std::vector<std::vector<ShellAnswer>>().swap(found);
+      std::vector<ShellAnswer> arrived = exchange(answers, ranks);
+      std::sort(arrived.begin(), arrived.end(),
+                [](const ShellAnswer& a, const ShellAnswer& b) { return std::tie(a.slot, a.r, a.m) < std::tie(b.slot, b.r, b.m); });
+      std::vector<std::size_t> from(homed + 1, arrived.size());  // each slot's answers start
+      for (std::size_t k = arrived.size(); k-- > 0;) from[arrived[k].slot] = k;
+      for (std::size_t g = homed; g-- > 0;) from[g] = std::min(from[g], from[g + 1]);
+      for (std::size_t g = 0; g < homed; ++g) {
+        if (done[g]) continue;
+        std::vector<std::pair<double, double>> inside;
+        for (std::size_t k = from[g]; k < from[g + 1]; ++k) inside.emplace_back(arrived[k].r, arrived[k].m);
+        if (const auto so = overdensity_crossing(inside, radius[g], limit, shell)) {
+          summary[g].r200 = so->radius;
+          summary[g].m200 = so->mass;
+          done[g] = 1;
+        } else {
+          radius[g] = std::min(2.0 * radius[g], limit);
+        }
+      }
+    }
+  }
+
+  // The catalogue on rank 0: by mass, ties by the smallest member ID.
+  std::vector<MemberName> names(members.size());
+  for (std::size_t k = 0; k < members.size(); ++k) names[k] = {members[k].r.id, members[k].r.origin, members[k].r.type, 0};
+  std::vector<Member>().swap(members);
+  std::vector<GroupSummary> summaries;
+  std::vector<MemberName> all_names;
+  if (ranks == nullptr) {
+    summaries = std::move(summary);
+    all_names = std::move(names);
+  } else {
+    std::vector<std::vector<GroupSummary>> s_to(static_cast<std::size_t>(count));
+    std::vector<std::vector<MemberName>> n_to(static_cast<std::size_t>(count));
+    s_to[0] = std::move(summary);
+    n_to[0] = std::move(names);
+    summaries = exchange(s_to, ranks);
+    all_names = exchange(n_to, ranks);
+    if (me != 0) return {};
+  }
+  std::vector<std::size_t> start(summaries.size() + 1, 0);
+  for (std::size_t g = 0; g < summaries.size(); ++g) start[g + 1] = start[g] + summaries[g].members;
+  if (start.back() != all_names.size()) throw std::logic_error("friends-of-friends: members and groups disagree");
+  std::vector<std::size_t> order(summaries.size());
+  for (std::size_t g = 0; g < order.size(); ++g) order[g] = g;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    if (summaries[a].mass != summaries[b].mass) return summaries[a].mass > summaries[b].mass;
+    return summaries[a].smallest_id < summaries[b].smallest_id;
+  });
+  GroupCatalogue out;
+  out.groups.resize(order.size());
+  out.member_id.reserve(all_names.size());
+  out.member_type.reserve(all_names.size());
+  out.member_origin.reserve(all_names.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const GroupSummary& s = summaries[order[k]];
+    Group& g = out.groups[k];
+    g.mass = s.mass;
+    g.mass_by_type = s.mass_by_type;
+    g.count_by_type = s.count_by_type;
+    g.centre_of_mass = s.centre_of_mass;
+    g.potential_minimum = s.potential_minimum;
+    g.velocity = s.velocity;
+    g.m200 = s.m200;
+    g.r200 = s.r200;
+    for (std::size_t m = start[order[k]]; m < start[order[k] + 1]; ++m) {
+      g.members.push_back(static_cast<std::uint32_t>(out.member_id.size()));
+      out.member_id.push_back(all_names[m].id);
+      out.member_type.push_back(all_names[m].type);
+      out.member_origin.push_back(all_names[m].origin);
+    }
+  }
+  return out;
+}
+
+}  // namespace fountain::groups
