@@ -3,7 +3,9 @@
 // z = 0 box: half the dark matter in Hernquist halos whose particle counts follow dn/dn ~ n^-1.9
 // from 32 to 10^5 (a concentration of 7 within the radius of 200 times the mean density), the
 // rest uniform; each gas particle sits near a dark matter one (a tenth of the spacing away).
-// Usage: fountain_group_bench [-n 128] [--threads N] [--json FILE].
+// Under mpirun each rank keeps every R-th particle and friends-of-friends runs across the
+// ranks (HOP, which runs in one process, is then skipped); the peak memory is the largest
+// rank's. Usage: [mpirun -np R] fountain_group_bench [-n 128] [--threads N] [--json FILE].
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -16,6 +18,9 @@
 #include <random>
 
 #include "BenchMain.hpp"
+#include "domain/RankExchange.hpp"
+#include "engine/CollectivesOverRanks.hpp"
+#include "groups/FofAcrossRanks.hpp"
 #include "groups/FofCatalogue.hpp"
 #include "groups/Hop.hpp"
 
@@ -77,9 +82,18 @@ int main(int argc, char** argv) {
     std::unique_ptr<tbb::global_control> limit;
     if (threads > 0) limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, threads);
     const double box = 100.0;
-    const fountain::groups::ParticleSet set = clustered_box(n, box, 1);
+    fountain::groups::ParticleSet set = clustered_box(n, box, 1);
     const std::size_t total = set.size() / 2;
     const double spacing = box / n;
+    const std::unique_ptr<fountain::domain::RankExchange> exchange = fountain::domain::RankExchange::world();
+    std::unique_ptr<fountain::CollectivesOverRanks> ranks;
+    if (exchange) {
+      ranks = std::make_unique<fountain::CollectivesOverRanks>(*exchange);
+      fountain::groups::ParticleSet mine;
+      for (std::size_t i = static_cast<std::size_t>(exchange->rank()); i < set.size(); i += static_cast<std::size_t>(exchange->size()))
+        mine.push_back(set.x[i], set.v[i], set.mass[i], set.id[i], set.type[i]);
+      set = std::move(mine);
+    }
 
     auto t0 = std::chrono::steady_clock::now();
     fountain::groups::FofParameters fof;
@@ -88,30 +102,39 @@ int main(int argc, char** argv) {
     fof.G = 1.0;
     fof.softening = 0.04 * spacing;
     fof.overdensity = 200.0 * static_cast<double>(total) / (box * box * box);  // 200 times the mean
-    const auto fof_groups = fountain::groups::find_fof_groups(set, fof);
+    const fountain::groups::GroupCatalogue found = fountain::groups::find_fof_groups_across_ranks(set, fof, ranks.get());
+    const auto& fof_groups = found.groups;
     const double fof_s = seconds_since(t0);
 
-    std::vector<Vec3> gas(set.x.begin() + static_cast<std::ptrdiff_t>(total), set.x.end());
-    std::vector<double> gas_mass(total, 0.15);
-    const double mean = 0.15 * static_cast<double>(total) / (box * box * box);
-    fountain::groups::HopParameters hop;
-    hop.box = box;
-    hop.delta_outer = 80.0 * mean;
-    hop.delta_saddle = 2.5 * hop.delta_outer;
-    hop.delta_peak = 3.0 * hop.delta_outer;
-    t0 = std::chrono::steady_clock::now();
-    const auto hop_groups = fountain::groups::find_hop_groups(gas, gas_mass, hop);
-    const double hop_s = seconds_since(t0);
+    double hop_s = 0.0;
+    fountain::groups::HopResult hop_groups;
+    if (!exchange) {
+      std::vector<Vec3> gas(set.x.begin() + static_cast<std::ptrdiff_t>(total), set.x.end());
+      std::vector<double> gas_mass(total, 0.15);
+      const double mean = 0.15 * static_cast<double>(total) / (box * box * box);
+      fountain::groups::HopParameters hop;
+      hop.box = box;
+      hop.delta_outer = 80.0 * mean;
+      hop.delta_saddle = 2.5 * hop.delta_outer;
+      hop.delta_peak = 3.0 * hop.delta_outer;
+      t0 = std::chrono::steady_clock::now();
+      hop_groups = fountain::groups::find_hop_groups(gas, gas_mass, hop);
+      hop_s = seconds_since(t0);
+    }
 
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
+    double peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
+    if (exchange)
+      for (const auto& theirs : exchange->allgather_values(std::span<const double>(&peak_mb, 1), "peak memory"))
+        peak_mb = std::max(peak_mb, theirs[0]);
     const std::string json = fmt::format(
-        "{{\"benchmark\": \"groups\", \"particles\": {}, \"threads\": {}, \"fof_s\": {:.3f}, \"fof_groups\": {}, "
-        "\"fof_largest\": {}, \"hop_particles\": {}, \"hop_s\": {:.3f}, \"hop_groups\": {}, \"hop_largest\": {}, "
-        "\"peak_rss_mb\": {:.1f}}}\n",
-        set.size(), threads, fof_s, fof_groups.size(), fof_groups.empty() ? 0 : fof_groups[0].members.size(), total, hop_s,
-        hop_groups.groups.size(), hop_groups.groups.empty() ? 0 : hop_groups.groups[0].members.size(),
-        static_cast<double>(usage.ru_maxrss) / 1024.0);
+        "{{\"benchmark\": \"groups\", \"particles\": {}, \"ranks\": {}, \"threads\": {}, \"fof_s\": {:.3f}, "
+        "\"fof_groups\": {}, \"fof_largest\": {}, \"hop_particles\": {}, \"hop_s\": {:.3f}, \"hop_groups\": {}, "
+        "\"hop_largest\": {}, \"peak_rss_mb\": {:.1f}}}\n",
+        2 * total, exchange ? exchange->size() : 1, threads, fof_s, fof_groups.size(),
+        fof_groups.empty() ? 0 : fof_groups[0].members.size(), exchange ? 0 : total, hop_s, hop_groups.groups.size(),
+        hop_groups.groups.empty() ? 0 : hop_groups.groups[0].members.size(), peak_mb);
     fountain::bench::report_json(mpi, json, json_path);
     return 0;
   });

@@ -461,24 +461,30 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
         out.insert(out.end(), found[q].begin(), found[q].end());
       }
       std::vector<std::vector<ShellAnswer>>().swap(found);
-      std::vector<ShellAnswer> arrived = exchange(answers, ranks);
-      std::sort(arrived.begin(), arrived.end(),
-                [](const ShellAnswer& a, const ShellAnswer& b) { return std::tie(a.slot, a.r, a.m) < std::tie(b.slot, b.r, b.m); });
-      std::vector<std::size_t> from(homed + 1, arrived.size());  // each slot's answers start
-      for (std::size_t k = arrived.size(); k-- > 0;) from[arrived[k].slot] = k;
-      for (std::size_t g = homed; g-- > 0;) from[g] = std::min(from[g], from[g + 1]);
-      for (std::size_t g = 0; g < homed; ++g) {
-        if (done[g]) continue;
-        std::vector<std::pair<double, double>> inside;
-        for (std::size_t k = from[g]; k < from[g + 1]; ++k) inside.emplace_back(arrived[k].r, arrived[k].m);
-        if (const auto so = overdensity_crossing(inside, radius[g], limit, shell)) {
-          summary[g].r200 = so->radius;
-          summary[g].m200 = so->mass;
-          done[g] = 1;
-        } else {
-          radius[g] = std::min(2.0 * radius[g], limit);
-        }
+      const std::vector<ShellAnswer> arrived = exchange(answers, ranks);
+      // Each group's (r, m) together, then sorted and read group by group in parallel.
+      std::vector<std::size_t> from(homed + 1, 0);
+      for (const ShellAnswer& a : arrived) ++from[a.slot + 1];
+      for (std::size_t g = 0; g < homed; ++g) from[g + 1] += from[g];
+      std::vector<std::pair<double, double>> inside(arrived.size());
+      {
+        std::vector<std::size_t> next(from.begin(), from.end() - 1);
+        for (const ShellAnswer& a : arrived) inside[next[a.slot]++] = {a.r, a.m};
       }
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, homed, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t g = range.begin(); g != range.end(); ++g) {
+          if (done[g]) continue;
+          const std::span<std::pair<double, double>> about = std::span(inside).subspan(from[g], from[g + 1] - from[g]);
+          std::sort(about.begin(), about.end());
+          if (const auto so = overdensity_crossing(about, radius[g], limit, shell)) {
+            summary[g].r200 = so->radius;
+            summary[g].m200 = so->mass;
+            done[g] = 1;
+          } else {
+            radius[g] = std::min(2.0 * radius[g], limit);
+          }
+        }
+      });
     }
   }
 

@@ -39,7 +39,7 @@ SphericalOverdensity spherical_overdensity(const PointGrid& grid, const Particle
   }
 }
 
-std::optional<SphericalOverdensity> overdensity_crossing(const std::vector<std::pair<double, double>>& inside, double radius,
+std::optional<SphericalOverdensity> overdensity_crossing(std::span<const std::pair<double, double>> inside, double radius,
                                                          double limit, double shell) {
   double enclosed = 0.0;
   for (const auto& [r, m] : inside) {

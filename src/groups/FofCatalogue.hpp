@@ -3,6 +3,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -69,7 +70,7 @@ SphericalOverdensity spherical_overdensity(const PointGrid& grid, const Particle
 // The same from the (r, m) of every particle within `radius` of the centre, sorted: the
 // answer, or nothing when the mean density is still above the threshold (shell = 4 pi
 // density / 3) at `radius` < `limit`. The answer does not depend on `radius` once there is one.
-std::optional<SphericalOverdensity> overdensity_crossing(const std::vector<std::pair<double, double>>& inside, double radius,
+std::optional<SphericalOverdensity> overdensity_crossing(std::span<const std::pair<double, double>> inside, double radius,
                                                          double limit, double shell);
 
 }  // namespace fountain::groups
