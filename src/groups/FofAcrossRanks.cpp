@@ -207,6 +207,13 @@ struct Member {
   Record r;
 };
 
+// A member where its group is homed: its group, and its place among the home's own particles
+// (at < own.size()) or, after them, among the guests other ranks sent.
+struct MemberRef {
+  std::uint64_t group = 0;
+  std::size_t at = 0;
+};
+
 // A group as found on its home rank, for rank 0.
 struct GroupSummary {
   double mass = 0.0;
@@ -279,108 +286,133 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
   }
   std::sort(own.begin(), own.end(), [](const Record& a, const Record& b) { return std::tie(a.id, a.origin) < std::tie(b.id, b.origin); });
 
-  // Copies of the primaries within a linking length of another slab go to its owner (with a
-  // margin: a copy too many links nothing that is not linked anyway).
-  std::vector<char> exported(own.size(), 0);
-  std::vector<Record> copies;
-  if (ranks != nullptr) {
-    const double reach = l * (1.0 + 1e-6);
-    std::vector<std::vector<Record>> to(static_cast<std::size_t>(count));
-    for (std::size_t k = 0; k < own.size(); ++k) {
-      if (!primary_type(own[k].type)) continue;
-      for (int q = 0; q < count; ++q)
-        if (q != me && slabs.near(own[k].x.x, q, reach)) {
-          to[static_cast<std::size_t>(q)].push_back(own[k]);
-          exported[k] = 1;
-        }
-    }
-    copies = exchange(to, ranks);
-  }
-
-  // The primaries linked here, own and copies, by ID: the root of a component is then its
-  // smallest ID, and the nearest-primary ties go to the smaller ID, as on one rank.
-  struct Linked {
-    std::uint64_t id, origin;
-    std::uint32_t at;  // in own, or in copies
-    bool copy;
-  };
-  std::vector<Linked> linked;
-  for (std::size_t k = 0; k < own.size(); ++k)
-    if (primary_type(own[k].type)) linked.push_back({own[k].id, own[k].origin, static_cast<std::uint32_t>(k), false});
-  for (std::size_t k = 0; k < copies.size(); ++k) linked.push_back({copies[k].id, copies[k].origin, static_cast<std::uint32_t>(k), true});
-  std::sort(linked.begin(), linked.end(),
-            [](const Linked& a, const Linked& b) { return std::tie(a.id, a.copy, a.origin) < std::tie(b.id, b.copy, b.origin); });
-  std::vector<Vec3> px(linked.size());
-  for (std::size_t k = 0; k < linked.size(); ++k) px[k] = linked[k].copy ? copies[linked[k].at].x : own[linked[k].at].x;
-  const PointGrid grid(px, l, box);
-  const std::vector<std::uint32_t> root = link_friends(grid, px, l);
-
-  // Components joined across slabs: every copy, and every primary copied elsewhere, ties its
-  // ID to its component's label (smallest ID) here; the union over all ranks is the same on each.
-  IdUnion joins;
-  if (ranks != nullptr) {
-    std::vector<std::array<std::uint64_t, 2>> ties;
-    for (std::size_t k = 0; k < linked.size(); ++k)
-      if (linked[k].copy || exported[linked[k].at]) ties.push_back({linked[k].id, linked[root[k]].id});
-    for (const auto& [a, b] : gather_all(ties, ranks)) joins.unite(a, b);
-  }
-  std::vector<std::uint64_t> label(linked.size());
-  for (std::size_t k = 0; k < linked.size(); ++k) label[k] = joins.find(linked[root[k]].id);
-
-  // Primaries per group over every rank. A label the joins never met is a component this
-  // rank holds whole; the others' counts are summed, and their home is the rank that owns
-  // the label's particle.
-  std::unordered_map<std::uint64_t, std::uint64_t> primaries;
-  std::unordered_set<std::uint64_t> own_labels;  // labels whose particle is this rank's
-  for (std::size_t k = 0; k < linked.size(); ++k)
-    if (!linked[k].copy) {
-      ++primaries[label[k]];
-      if (label[k] == linked[k].id) own_labels.insert(label[k]);
-    }
-  struct Share {
-    std::uint64_t label, primaries;
-    std::int64_t home;  // this rank where it owns the label's particle, else -1
-  };
-  std::vector<Share> shares;
-  for (const auto& [g, n] : primaries)
-    if (joins.contains(g)) shares.push_back({g, n, own_labels.count(g) != 0 ? me : -1});
-  std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) { return a.label < b.label; });
-  std::unordered_map<std::uint64_t, std::pair<std::uint64_t, int>> shared;  // label: (primaries, home)
-  for (const Share& s : gather_all(shares, ranks)) {
-    auto& [n, home] = shared.try_emplace(s.label, 0, -1).first->second;
-    n += s.primaries;
-    if (s.home >= 0) home = static_cast<int>(s.home);
-  }
-  // (primaries, home) of the group labelled g.
-  auto group_of = [&](std::uint64_t g) -> std::pair<std::uint64_t, int> {
-    if (const auto it = shared.find(g); it != shared.end()) return it->second;
-    return {primaries.at(g), me};
-  };
-
-  // Every member to its group's home: primaries by their label, the others by the label of
-  // their nearest primary within the linking length (own or copied: it is within l of this slab).
+  // Each own particle's group (its label) and the group's home, where it has enough primaries
+  // (-1 elsewhere); what the linking needs is freed before the groups' properties are found.
+  std::vector<MemberRef> members;
   std::vector<std::uint64_t> group_label(own.size(), 0);
-  std::vector<char> in_group(own.size(), 0);
-  for (std::size_t k = 0; k < linked.size(); ++k)
-    if (!linked[k].copy) group_label[linked[k].at] = label[k], in_group[linked[k].at] = 1;
+  std::vector<std::int32_t> home_of(own.size(), -1);
   {
-    std::vector<std::uint32_t> others;
-    std::vector<Vec3> ox;
+    // Copies of the primaries within a linking length of another slab go to its owner (with a
+    // margin: a copy too many links nothing that is not linked anyway).
+    std::vector<char> exported(own.size(), 0);
+    std::vector<Record> copies;
+    if (ranks != nullptr) {
+      const double reach = l * (1.0 + 1e-6);
+      std::vector<std::vector<Record>> to(static_cast<std::size_t>(count));
+      for (std::size_t k = 0; k < own.size(); ++k) {
+        if (!primary_type(own[k].type)) continue;
+        for (int q = 0; q < count; ++q)
+          if (q != me && slabs.near(own[k].x.x, q, reach)) {
+            to[static_cast<std::size_t>(q)].push_back(own[k]);
+            exported[k] = 1;
+          }
+      }
+      copies = exchange(to, ranks);
+    }
+
+    // The primaries linked here, own and copies, by ID: the root of a component is then its
+    // smallest ID, and the nearest-primary ties go to the smaller ID, as on one rank.
+    struct Linked {
+      std::uint64_t id, origin;
+      std::uint32_t at;  // in own, or in copies
+      bool copy;
+    };
+    std::vector<Linked> linked;
     for (std::size_t k = 0; k < own.size(); ++k)
-      if (!primary_type(own[k].type)) others.push_back(static_cast<std::uint32_t>(k)), ox.push_back(own[k].x);
-    const std::vector<std::int64_t> host = nearest_within(grid, px, ox, l);
-    for (std::size_t q = 0; q < others.size(); ++q)
-      if (host[q] >= 0) group_label[others[q]] = label[static_cast<std::size_t>(host[q])], in_group[others[q]] = 1;
+      if (primary_type(own[k].type)) linked.push_back({own[k].id, own[k].origin, static_cast<std::uint32_t>(k), false});
+    for (std::size_t k = 0; k < copies.size(); ++k) linked.push_back({copies[k].id, copies[k].origin, static_cast<std::uint32_t>(k), true});
+    std::sort(linked.begin(), linked.end(),
+              [](const Linked& a, const Linked& b) { return std::tie(a.id, a.copy, a.origin) < std::tie(b.id, b.copy, b.origin); });
+    std::vector<Vec3> px(linked.size());
+    for (std::size_t k = 0; k < linked.size(); ++k) px[k] = linked[k].copy ? copies[linked[k].at].x : own[linked[k].at].x;
+    const PointGrid grid(px, l, box);
+    const std::vector<std::uint32_t> root = link_friends(grid, px, l);
+
+    // Components joined across slabs: every copy, and every primary copied elsewhere, ties its
+    // ID to its component's label (smallest ID) here; the union over all ranks is the same on each.
+    IdUnion joins;
+    if (ranks != nullptr) {
+      std::vector<std::array<std::uint64_t, 2>> ties;
+      for (std::size_t k = 0; k < linked.size(); ++k)
+        if (linked[k].copy || exported[linked[k].at]) ties.push_back({linked[k].id, linked[root[k]].id});
+      for (const auto& [a, b] : gather_all(ties, ranks)) joins.unite(a, b);
+    }
+    std::vector<std::uint64_t> label(linked.size());
+    for (std::size_t k = 0; k < linked.size(); ++k) label[k] = joins.find(linked[root[k]].id);
+
+    // Primaries per group over every rank. A label the joins never met is a component this
+    // rank holds whole; the others' counts are summed, and their home is the rank that owns
+    // the label's particle.
+    std::unordered_map<std::uint64_t, std::uint64_t> primaries;
+    std::unordered_set<std::uint64_t> own_labels;  // labels whose particle is this rank's
+    for (std::size_t k = 0; k < linked.size(); ++k)
+      if (!linked[k].copy) {
+        ++primaries[label[k]];
+        if (label[k] == linked[k].id) own_labels.insert(label[k]);
+      }
+    struct Share {
+      std::uint64_t label, primaries;
+      std::int64_t home;  // this rank where it owns the label's particle, else -1
+    };
+    std::vector<Share> shares;
+    for (const auto& [g, n] : primaries)
+      if (joins.contains(g)) shares.push_back({g, n, own_labels.count(g) != 0 ? me : -1});
+    std::sort(shares.begin(), shares.end(), [](const Share& a, const Share& b) { return a.label < b.label; });
+    std::unordered_map<std::uint64_t, std::pair<std::uint64_t, int>> shared;  // label: (primaries, home)
+    for (const Share& s : gather_all(shares, ranks)) {
+      auto& [n, home] = shared.try_emplace(s.label, 0, -1).first->second;
+      n += s.primaries;
+      if (s.home >= 0) home = static_cast<int>(s.home);
+    }
+    // (primaries, home) of the group labelled g.
+    auto group_of = [&](std::uint64_t g) -> std::pair<std::uint64_t, int> {
+      if (const auto it = shared.find(g); it != shared.end()) return it->second;
+      return {primaries.at(g), me};
+    };
+
+    // Every member to its group's home: primaries by their label, the others by the label of
+    // their nearest primary within the linking length (own or copied: it is within l of this slab).
+    std::vector<char> in_group(own.size(), 0);
+    for (std::size_t k = 0; k < linked.size(); ++k)
+      if (!linked[k].copy) group_label[linked[k].at] = label[k], in_group[linked[k].at] = 1;
+    {
+      std::vector<std::uint32_t> others;
+      std::vector<Vec3> ox;
+      for (std::size_t k = 0; k < own.size(); ++k)
+        if (!primary_type(own[k].type)) others.push_back(static_cast<std::uint32_t>(k)), ox.push_back(own[k].x);
+      const std::vector<std::int64_t> host = nearest_within(grid, px, ox, l);
+      for (std::size_t q = 0; q < others.size(); ++q)
+        if (host[q] >= 0) group_label[others[q]] = label[static_cast<std::size_t>(host[q])], in_group[others[q]] = 1;
+    }
+    for (std::size_t k = 0; k < own.size(); ++k) {
+      if (!in_group[k]) continue;
+      const auto [n, home] = group_of(group_label[k]);
+      if (n >= p.min_members) home_of[k] = home;
+    }
   }
-  std::vector<std::vector<Member>> to(static_cast<std::size_t>(count));
-  for (std::size_t k = 0; k < own.size(); ++k) {
-    if (!in_group[k]) continue;
-    const auto [n, home] = group_of(group_label[k]);
-    if (n >= p.min_members) to[static_cast<std::size_t>(home)].push_back({group_label[k], own[k]});
+
+  // The members of the groups homed here: this rank's own (by index) and those other ranks
+  // send (kept as guests), by group, then type, then ID.
+  std::vector<Record> guests;
+  {
+    std::vector<std::vector<Member>> to(static_cast<std::size_t>(count));
+    for (std::size_t k = 0; k < own.size(); ++k)
+      if (home_of[k] >= 0 && home_of[k] != me) to[static_cast<std::size_t>(home_of[k])].push_back({group_label[k], own[k]});
+    std::vector<Member> arrived = exchange(to, ranks);
+    guests.reserve(arrived.size());
+    for (const Member& m : arrived) guests.push_back(m.r);
+    std::vector<MemberRef> refs;
+    for (std::size_t k = 0; k < own.size(); ++k)
+      if (home_of[k] == me) refs.push_back({group_label[k], k});
+    for (std::size_t k = 0; k < arrived.size(); ++k) refs.push_back({arrived[k].group, own.size() + k});
+    members.swap(refs);
   }
-  std::vector<Member> members = exchange(to, ranks);
-  std::sort(members.begin(), members.end(), [](const Member& a, const Member& b) {
-    return std::tie(a.group, a.r.type, a.r.id, a.r.origin) < std::tie(b.group, b.r.type, b.r.id, b.r.origin);
+  std::vector<std::int32_t>().swap(home_of);
+  std::vector<std::uint64_t>().swap(group_label);
+  auto record = [&](const MemberRef& m) -> const Record& { return m.at < own.size() ? own[m.at] : guests[m.at - own.size()]; };
+  std::sort(members.begin(), members.end(), [&](const MemberRef& a, const MemberRef& b) {
+    const Record &ra = record(a), &rb = record(b);
+    return std::tie(a.group, ra.type, ra.id, ra.origin) < std::tie(b.group, rb.type, rb.id, rb.origin);
   });
   std::vector<std::size_t> first;  // each home group's members: [first[g], first[g + 1])
   for (std::size_t k = 0; k < members.size(); ++k)
@@ -395,7 +427,7 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
     for (std::size_t g = range.begin(); g != range.end(); ++g) {
       GroupSummary& s = summary[g];
       const std::size_t n = first[g + 1] - first[g];
-      auto at = [&](std::size_t k) -> const Record& { return members[first[g] + k].r; };
+      auto at = [&](std::size_t k) -> const Record& { return record(members[first[g] + k]); };
       const Vec3 reference = at(0).x;
       std::vector<Vec3> local(n);
       std::vector<double> mass(n);
@@ -490,8 +522,12 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
 
   // The catalogue on rank 0: by mass, ties by the smallest member ID.
   std::vector<MemberName> names(members.size());
-  for (std::size_t k = 0; k < members.size(); ++k) names[k] = {members[k].r.id, members[k].r.origin, members[k].r.type, 0};
-  std::vector<Member>().swap(members);
+  for (std::size_t k = 0; k < members.size(); ++k) {
+    const Record& r = record(members[k]);
+    names[k] = {r.id, r.origin, r.type, 0};
+  }
+  std::vector<MemberRef>().swap(members);
+  std::vector<Record>().swap(guests);
   std::vector<GroupSummary> summaries;
   std::vector<MemberName> all_names;
   if (ranks == nullptr) {
