@@ -22,6 +22,7 @@
 #include "core/PeriodicWrap.hpp"
 #include "gravity/GravityTree.hpp"
 #include "groups/FriendsOfFriends.hpp"
+#include "groups/SlabsAcrossRanks.hpp"
 
 namespace fountain::groups {
 
@@ -35,51 +36,6 @@ struct Record {
   std::int32_t type = 0, pad = 0;
 };
 
-template <class T>
-std::vector<char> bytes_of(const std::vector<T>& v) {
-  static_assert(std::is_trivially_copyable_v<T>);
-  std::vector<char> out(v.size() * sizeof(T));
-  if (!v.empty()) std::memcpy(out.data(), v.data(), out.size());
-  return out;
-}
-
-template <class T>
-void append_from(std::span<const char> bytes, std::vector<T>& out) {
-  if (bytes.size() % sizeof(T) != 0) throw std::logic_error("friends-of-friends: a message of the wrong length");
-  const std::size_t n = bytes.size() / sizeof(T), at = out.size();
-  out.resize(at + n);
-  if (n > 0) std::memcpy(static_cast<void*>(out.data() + at), bytes.data(), bytes.size());
-}
-
-// Every rank's values, one after the other in rank order.
-template <class T>
-std::vector<T> gather_all(const std::vector<T>& mine, Collectives* ranks) {
-  if (ranks == nullptr) return mine;
-  std::vector<T> all;
-  for (const auto& b : ranks->allgather(bytes_of(mine))) append_from<T>(b, all);
-  return all;
-}
-
-// to[q] goes to rank q; what every rank sent this one, in rank order (its own to[me] in place).
-template <class T>
-std::vector<T> exchange(std::vector<std::vector<T>>& to, Collectives* ranks) {
-  if (ranks == nullptr) return std::move(to[0]);
-  const int me = ranks->rank();
-  std::vector<std::vector<char>> out(to.size());
-  for (std::size_t q = 0; q < to.size(); ++q)
-    if (static_cast<int>(q) != me) {
-      out[q] = bytes_of(to[q]);
-      std::vector<T>().swap(to[q]);
-    }
-  const std::vector<std::vector<char>> in = ranks->alltoall(out);
-  std::vector<T> arrived;
-  for (std::size_t q = 0; q < to.size(); ++q) {
-    if (static_cast<int>(q) == me) arrived.insert(arrived.end(), to[q].begin(), to[q].end());
-    else append_from<T>(in[q], arrived);
-  }
-  return arrived;
-}
-
 // b - a as the nearest periodic image (as PointGrid::separation).
 Vec3 separation(const Vec3& a, const Vec3& b, double box) {
   Vec3 d = b - a;
@@ -92,71 +48,6 @@ Vec3 separation(const Vec3& a, const Vec3& b, double box) {
 }
 
 Vec3 folded(const Vec3& x, double box) { return box > 0.0 ? wrap_into_box(x, Vec3{box, box, box}) : x; }
-
-// Slabs of x with equal particle counts (to a 4096th of the box), one per rank, cut from a
-// histogram summed over the ranks: the same slabs however the particles are spread.
-class Slabs {
- public:
-  Slabs(const std::vector<Record>& mine, double box, Collectives* ranks) : box_(box) {
-    const int count = ranks == nullptr ? 1 : ranks->size();
-    if (box > 0.0) {
-      lo_ = 0.0, width_ = box;
-    } else {
-      std::vector<double> bounds{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
-      for (const Record& r : mine) bounds[0] = std::min(bounds[0], r.x.x), bounds[1] = std::max(bounds[1], r.x.x);
-      const std::vector<double> all = gather_all(bounds, ranks);
-      double lo = all[0], hi = all[1];
-      for (std::size_t k = 0; k < all.size(); k += 2) lo = std::min(lo, all[k]), hi = std::max(hi, all[k + 1]);
-      lo_ = std::isfinite(lo) ? lo : 0.0;
-      width_ = std::isfinite(hi) && hi > lo ? hi - lo : 1.0;
-    }
-    std::vector<std::uint64_t> histogram(kBins, 0);
-    for (const Record& r : mine) ++histogram[static_cast<std::size_t>(bin(r.x.x))];
-    const std::vector<std::uint64_t> all = gather_all(histogram, ranks);
-    std::vector<std::uint64_t> total(kBins, 0);
-    for (std::size_t k = 0; k < all.size(); ++k) total[k % kBins] += all[k];
-    std::uint64_t n = 0;
-    for (std::uint64_t c : total) n += c;
-    slab_of_bin_.resize(kBins);
-    first_bin_.assign(static_cast<std::size_t>(count) + 1, kBins);
-    std::uint64_t before = 0;
-    for (int b = 0; b < kBins; ++b) {
-      const int s = n == 0 ? 0 : static_cast<int>(std::min<std::uint64_t>(count - 1, before * static_cast<std::uint64_t>(count) / n));
-      slab_of_bin_[static_cast<std::size_t>(b)] = s;
-      first_bin_[static_cast<std::size_t>(s)] = std::min(first_bin_[static_cast<std::size_t>(s)], b);
-      before += total[static_cast<std::size_t>(b)];
-    }
-    // Slabs given no bin are empty: they start where the next one does.
-    for (int s = count - 1; s >= 0; --s)
-      first_bin_[static_cast<std::size_t>(s)] = std::min(first_bin_[static_cast<std::size_t>(s)], first_bin_[static_cast<std::size_t>(s) + 1]);
-  }
-
-  int of(double x) const { return slab_of_bin_[static_cast<std::size_t>(bin(x))]; }
-
-  // Whether x lies within `reach` of slab q (nearest images when periodic).
-  bool near(double x, int q, double reach) const {
-    const int b0 = first_bin_[static_cast<std::size_t>(q)], b1 = first_bin_[static_cast<std::size_t>(q) + 1];
-    if (b0 == b1) return false;  // empty
-    const double a = lo_ + width_ * b0 / kBins, b = lo_ + width_ * b1 / kBins;
-    const double xf = box_ > 0.0 ? wrap_into_box(x, box_) : x;
-    if (xf >= a && xf <= b) return true;
-    if (box_ > 0.0) {
-      auto ahead = [&](double d) { return d - box_ * std::floor(d / box_); };
-      return std::min(ahead(a - xf), ahead(xf - b)) < reach;
-    }
-    return (xf < a ? a - xf : xf - b) < reach;
-  }
-
- private:
-  static constexpr int kBins = 4096;
-  int bin(double x) const {
-    const double xf = box_ > 0.0 ? wrap_into_box(x, box_) : x;
-    const double b = std::floor((xf - lo_) / width_ * kBins);
-    return static_cast<int>(std::clamp(b, 0.0, static_cast<double>(kBins - 1)));
-  }
-  double box_ = 0.0, lo_ = 0.0, width_ = 1.0;
-  std::vector<int> slab_of_bin_, first_bin_;
-};
 
 // Union-find over particle IDs: a set's root is its smallest ID, whatever the order of the unions.
 class IdUnion {
@@ -277,7 +168,10 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
   std::vector<Record> own(mine.size());
   for (std::size_t i = 0; i < mine.size(); ++i)
     own[i] = {mine.x[i], mine.v[i], mine.mass[i], mine.id[i], static_cast<std::uint64_t>(i), mine.type[i], 0};
-  const Slabs slabs(own, box, ranks);
+  std::vector<double> slab_x(own.size());
+  for (std::size_t i = 0; i < own.size(); ++i) slab_x[i] = own[i].x.x;
+  const Slabs slabs(slab_x, box, ranks);
+  std::vector<double>().swap(slab_x);
   if (ranks != nullptr) {
     std::vector<std::vector<Record>> to(static_cast<std::size_t>(count));
     for (const Record& r : own) to[static_cast<std::size_t>(slabs.of(r.x.x))].push_back(r);
