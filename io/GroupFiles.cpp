@@ -188,46 +188,32 @@ FofHalos read_fof_halos(const std::string& path) {
   return h;
 }
 
-void write_hop_catalogue(const std::string& path, const groups::HopResult& hop, const std::vector<std::uint32_t>& members,
-                         const std::vector<double>& hop_mass, const GroupInput& input, const HopCatalogueInfo& info) {
+void write_hop_catalogue(const std::string& path, const groups::HopCatalogue& catalogue, const GroupInput& input,
+                         const HopCatalogueInfo& info) {
   hdf5::File f(path, hdf5::File::Mode::create);
-  const groups::ParticleSet& set = input.particles;
-  const std::size_t n = hop.groups.size();
+  const std::size_t n = catalogue.groups.size();
   std::vector<std::uint64_t> len(n), offset(n), len_type(6 * n), ids;
   std::vector<double> mass(n), mass_type(6 * n), peak_density(n), density;
   std::vector<Vec3> cm(n), peak(n), vel(n);
   std::vector<std::int32_t> member_type;
-  const double box = input.box;
   for (std::size_t g = 0; g < n; ++g) {
-    const groups::HopGroup& group = hop.groups[g];
+    const groups::HopCatalogueGroup& group = catalogue.groups[g];
     len[g] = group.members.size();
     offset[g] = ids.size();
-    const Vec3 reference = set.x[members[group.peak]];
-    Vec3 moment{}, momentum{};
-    for (std::uint32_t k : group.members) {
-      const std::uint32_t i = members[k];
-      const auto t = static_cast<std::size_t>(set.type[i]);
-      ++len_type[6 * g + t];
-      // Gas carries its hidden stars: its set mass under type 0, the hidden part under type 4.
-      mass_type[6 * g + t] += set.mass[i];
-      if (hop_mass[k] > set.mass[i]) mass_type[6 * g + 4] += hop_mass[k] - set.mass[i];
-      Vec3 d = set.x[i] - reference;
-      if (box > 0.0)
-        for (int c = 0; c < 3; ++c) d[c] -= box * std::nearbyint(d[c] / box);
-      moment += d * hop_mass[k];
-      momentum += set.v[i] * hop_mass[k];
-      ids.push_back(set.id[i]);
-      member_type.push_back(set.type[i]);
-      density.push_back(hop.density[k]);
+    for (std::size_t t = 0; t < 6; ++t) {
+      len_type[6 * g + t] = group.count_by_type[t];
+      mass_type[6 * g + t] = group.mass_by_type[t];
+    }
+    for (std::uint32_t m : group.members) {
+      ids.push_back(catalogue.member_id[m]);
+      member_type.push_back(catalogue.member_type[m]);
+      density.push_back(catalogue.member_density[m]);
     }
     mass[g] = group.mass;
-    Vec3 c = reference + moment * (1.0 / group.mass);
-    if (box > 0.0)
-      for (int k = 0; k < 3; ++k) c[k] -= box * std::floor(c[k] / box);
-    cm[g] = c;
-    peak[g] = reference;
+    cm[g] = group.centre_of_mass;
+    peak[g] = group.peak;
     peak_density[g] = group.peak_density;
-    vel[g] = momentum * (1.0 / group.mass);
+    vel[g] = group.velocity;
   }
   const groups::HopParameters& p = info.parameters;
   write_catalogue_header(f, n, ids.size(), input, info.snapshot);

@@ -7,6 +7,7 @@
 #include "groups/FofAcrossRanks.hpp"
 #include "groups/FofCatalogue.hpp"
 #include "groups/Hop.hpp"
+#include "groups/HopAcrossRanks.hpp"
 
 namespace fountain::io {
 
@@ -66,12 +67,11 @@ struct HopCatalogueInfo {
   double mean_baryon_density = 0.0;  // the thresholds' unit (comoving)
 };
 
-// /Header (counts, the snapshot's time, cosmology and units, HOP's parameters and thresholds), /Group
-// (GroupLen, GroupLenType, GroupMass, GroupMassType with hidden stellar mass under type 4,
-// GroupCM, GroupPeakPos, GroupPeakDensity, GroupVel, GroupOffset) and /IDs (ID, Type and the
-// HOP Density of the members, group by group in increasing particle order). `members[k]` is
-// the ParticleSet index of HOP's particle k.
-void write_hop_catalogue(const std::string& path, const groups::HopResult& hop, const std::vector<std::uint32_t>& members,
-                         const std::vector<double>& hop_mass, const GroupInput& input, const HopCatalogueInfo& info);
+// /Header (counts, the snapshot's time, cosmology and units from `header`, HOP's parameters
+// and thresholds), /Group (GroupLen, GroupLenType, GroupMass, GroupMassType with hidden
+// stellar mass under type 4, GroupCM, GroupPeakPos, GroupPeakDensity, GroupVel, GroupOffset)
+// and /IDs (ID, Type and the HOP Density of the members, group by group in increasing ID).
+void write_hop_catalogue(const std::string& path, const groups::HopCatalogue& catalogue, const GroupInput& header,
+                         const HopCatalogueInfo& info);
 
 }  // namespace fountain::io

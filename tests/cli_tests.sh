@@ -514,23 +514,26 @@ for name in ('fof_0002.hdf5', 'hop_0002.hdf5'):
         ok = ok and np.array_equal(a[d][:], b[d][:])
 sys.exit(0 if ok else 1)
 EOT
-      # Friends-of-friends on 2 ranks, each linking its own particles, and `fountain fof` on
-      # the snapshot: the one-process run's catalogue, every dataset bit for bit.
+      # The group finders on 2 ranks, each with its own particles, and `fountain fof` and
+      # `fountain hop` on the snapshot: the one-process run's catalogues, every dataset bit for bit.
       "$bin" fof outA/snapshot_0002.hdf5 -o fof_offline.hdf5 > fof_offline.txt 2>&1 || { cat fof_offline.txt; fail "fof"; }
-      "$python" - <<'EOT' || fail "the friends-of-friends catalogues of 1 and 2 ranks, or in the run and from its snapshot, differ"
+      "$bin" hop outA/snapshot_0002.hdf5 -o hop_offline.hdf5 > hop_offline.txt 2>&1 || { cat hop_offline.txt; fail "hop"; }
+      "$python" - <<'EOT' || fail "the catalogues of 1 and 2 ranks, or in the run and from its snapshot, differ"
 import h5py, numpy as np, sys
-ref = h5py.File('outA/fof_0002.hdf5', 'r')
-names = []
-ref.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
-ok = ref['Header'].attrs['Ngroups_Total'] > 0 and len(names) >= 12
-for other in ('outr/fof_0002.hdf5', 'fof_offline.hdf5'):
-    f = h5py.File(other, 'r')
-    for n in names:
-        if not np.array_equal(ref[n][:], f[n][:], equal_nan=True):
-            print(other, n, 'differs'); ok = False
-    for k, v in ref['Header'].attrs.items():
-        if k != 'Snapshot' and not np.array_equal(np.asarray(v), np.asarray(f['Header'].attrs[k])):
-            print(other, 'Header', k, 'differs'); ok = False
+ok = True
+for kind in ('fof', 'hop'):
+    ref = h5py.File('outA/%s_0002.hdf5' % kind, 'r')
+    names = []
+    ref.visititems(lambda n, o: names.append(n) if isinstance(o, h5py.Dataset) else None)
+    ok = ok and ref['Header'].attrs['Ngroups_Total'] > 0 and len(names) >= 11
+    for other in ('outr/%s_0002.hdf5' % kind, '%s_offline.hdf5' % kind):
+        f = h5py.File(other, 'r')
+        for n in names:
+            if not np.array_equal(ref[n][:], f[n][:], equal_nan=True):
+                print(other, n, 'differs'); ok = False
+        for k, v in ref['Header'].attrs.items():
+            if k != 'Snapshot' and not np.array_equal(np.asarray(v), np.asarray(f['Header'].attrs[k])):
+                print(other, 'Header', k, 'differs'); ok = False
 sys.exit(0 if ok else 1)
 EOT
     else

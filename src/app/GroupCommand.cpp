@@ -14,6 +14,7 @@
 #include "groups/FofAcrossRanks.hpp"
 #include "groups/FofCatalogue.hpp"
 #include "groups/Hop.hpp"
+#include "groups/HopAcrossRanks.hpp"
 #include "io/GroupFiles.hpp"
 
 namespace fountain {
@@ -30,37 +31,42 @@ std::unique_ptr<tbb::global_control> limit_threads(int threads) {
 }  // namespace
 
 std::string find_hop_groups(const HopRequest& request) {
-  const auto start = std::chrono::steady_clock::now();
-  const auto threads = limit_threads(request.threads);
   const io::GroupInput in = io::read_group_input(request.snapshot);
-  const groups::ParticleSet& set = in.particles;
   // Baryons only: gas with its hidden stellar mass, and stars.
-  std::vector<std::uint32_t> members;
-  std::vector<Vec3> x;
-  std::vector<double> mass;
+  groups::ParticleSet baryons;
+  std::vector<double> hidden;
+  const groups::ParticleSet& set = in.particles;
   for (std::size_t i = 0; i < set.size(); ++i)
     if (set.type[i] == 0 || set.type[i] == 4) {
-      members.push_back(static_cast<std::uint32_t>(i));
-      x.push_back(set.x[i]);
-      mass.push_back(set.mass[i] + in.hidden_mass[i]);
+      baryons.push_back(set.x[i], set.v[i], set.mass[i], set.id[i], set.type[i]);
+      hidden.push_back(in.hidden_mass[i]);
     }
-  if (members.empty()) throw InputError(fmt::format("{}: no gas or star particles for HOP", request.snapshot));
-  const double omega_b = request.omega_b >= 0.0 ? request.omega_b : in.omega_b;
-  if (!in.cosmological || !(omega_b > 0.0))
+  return find_hop_groups(request, baryons, hidden, in, nullptr);
+}
+
+std::string find_hop_groups(const HopRequest& request, const groups::ParticleSet& baryons, std::span<const double> hidden,
+                            const io::GroupInput& header, Collectives* ranks) {
+  const auto start = std::chrono::steady_clock::now();
+  const auto threads = limit_threads(request.threads);
+  const std::uint64_t count = groups::count_over_ranks(baryons.size(), ranks);
+  if (count == 0) throw InputError(fmt::format("{}: no gas or star particles for HOP", request.snapshot));
+  const double omega_b = request.omega_b >= 0.0 ? request.omega_b : header.omega_b;
+  if (!header.cosmological || !(omega_b > 0.0))
     throw InputError(fmt::format("{}: HOP's thresholds are in mean baryon densities, Omega_b rho_crit0: the snapshot "
                                  "{}; give --omega-b",
-                                 request.snapshot, in.cosmological ? "has no OmegaBaryon" : "is not cosmological"));
+                                 request.snapshot, header.cosmological ? "has no OmegaBaryon" : "is not cosmological"));
   groups::HopParameters p;
-  const double mean = omega_b * cosmology::critical_density0_in(in.units);
+  const double mean = omega_b * cosmology::critical_density0_in(header.units);
   p.n_dens = request.n_dens;
   p.n_hop = request.n_hop;
   p.n_merge = request.n_merge;
   p.delta_outer = request.outer * mean;
   p.delta_saddle = request.saddle_factor * p.delta_outer;
   p.delta_peak = request.peak_factor * p.delta_outer;
-  p.box = in.box;
-  const groups::HopResult hop = groups::find_hop_groups(x, mass, p);
-  io::write_hop_catalogue(request.output, hop, members, mass, in, {request.snapshot, p, mean});
+  p.box = header.box;
+  const groups::HopCatalogue hop = groups::find_hop_groups_across_ranks(baryons, hidden, p, ranks);
+  if (ranks != nullptr && ranks->rank() != 0) return {};
+  io::write_hop_catalogue(request.output, hop, header, {request.snapshot, p, mean});
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const std::string largest = hop.groups.empty()
                                   ? std::string("none")
@@ -68,7 +74,7 @@ std::string find_hop_groups(const HopRequest& request) {
                                                 hop.groups[0].members.size());
   return fmt::format("wrote {} ({} HOP groups among {} baryonic particles, delta_outer = {:g} mean baryon densities; "
                      "{}) in {:.2f} s",
-                     request.output, hop.groups.size(), members.size(), request.outer, largest, seconds);
+                     request.output, hop.groups.size(), count, request.outer, largest, seconds);
 }
 
 std::string find_groups(const FofRequest& request) {

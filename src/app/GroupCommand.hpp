@@ -1,5 +1,6 @@
 // `fountain fof` and `fountain hop`: a snapshot's groups, written as catalogues.
 #pragma once
+#include <span>
 #include <string>
 #include <vector>
 
@@ -42,5 +43,11 @@ struct HopRequest {
 // HOP on the snapshot's baryons (gas with its hidden stars, and stars); writes the catalogue
 // and returns the summary line.
 std::string find_hop_groups(const HopRequest& request);
+// The same for baryons that several ranks hold, each its own (types 0 and 4, with the gas's
+// hidden stellar masses), as a run finds them at its outputs; `header` as for find_groups.
+// Every rank calls it; rank 0 writes the catalogue and returns the line, the others an empty
+// string. The catalogue is the one `fountain hop` writes from the snapshot of the same particles.
+std::string find_hop_groups(const HopRequest& request, const groups::ParticleSet& baryons, std::span<const double> hidden,
+                            const io::GroupInput& header, Collectives* ranks);
 
 }  // namespace fountain

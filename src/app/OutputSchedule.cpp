@@ -71,6 +71,18 @@ groups::ParticleSet SnapshotSeries::own_particles() const {
   return set;
 }
 
+void SnapshotSeries::own_baryons(groups::ParticleSet& baryons, std::vector<double>& hidden) const {
+  const groups::ParticleSet all = own_particles();
+  const auto [gas, collisionless] = engine_.owned_particles();
+  const GasParticles& g = engine_.gas();
+  // Gas first, as own_particles() lists it; hidden stars only where a snapshot writes them.
+  for (std::size_t k = 0; k < all.size(); ++k)
+    if (all.type[k] == 0 || all.type[k] == 4) {
+      baryons.push_back(all.x[k], all.v[k], all.mass[k], all.id[k], all.type[k]);
+      hidden.push_back(k < gas.size() && info_.star_formation ? g.mass_stars_hidden[gas[k]] : 0.0);
+    }
+}
+
 io::GroupInput SnapshotSeries::group_header() const {
   io::GroupInput h;
   const Vec3& box = info_.box_size;
@@ -122,8 +134,7 @@ void SnapshotSeries::write() {
     }
   }
   // Groups of the particles just written, as `fountain fof` and `fountain hop` would find
-  // them in the snapshot: friends-of-friends on every rank's own particles, HOP on rank 0 from
-  // the snapshot.
+  // them in the snapshot, each rank with its own particles.
   const OutputConfig& out = config_.output;
   if (out.fof_groups) {
     FofRequest fof;
@@ -133,14 +144,17 @@ void SnapshotSeries::write() {
     const std::string line = find_groups(fof, own_particles(), group_header(), engine_.collectives());
     if (!quiet_ && engine_.rank() == 0) fmt::print(stderr, "{}\n", line);
   }
-  if (engine_.rank() == 0 && out.hop_groups && engine_.gas_count() + counts.stars > 0) {
+  if (out.hop_groups && counts.gas + counts.stars > 0) {
     HopRequest hop;
     hop.snapshot = path;
     hop.output = fmt::format("{}/hop_{:04d}.hdf5", out.directory, written_);
     hop.omega_b = config_.comoving.cosmology.omega_b;
     hop.threads = config_.threads;
-    const std::string line = find_hop_groups(hop);
-    if (!quiet_) fmt::print(stderr, "{}\n", line);
+    groups::ParticleSet baryons;
+    std::vector<double> hidden;
+    own_baryons(baryons, hidden);
+    const std::string line = find_hop_groups(hop, baryons, hidden, group_header(), engine_.collectives());
+    if (!quiet_ && engine_.rank() == 0) fmt::print(stderr, "{}\n", line);
   }
   ++written_;
 }

@@ -49,6 +49,8 @@ class SnapshotSeries {
   // This rank's own particles as the group finders read them from a snapshot, and the
   // snapshot's header as they read it.
   groups::ParticleSet own_particles() const;
+  // Its gas and stars, with the gas's hidden stellar masses as the snapshot stores them.
+  void own_baryons(groups::ParticleSet& baryons, std::vector<double>& hidden) const;
   io::GroupInput group_header() const;
 
   const RunConfig& config_;

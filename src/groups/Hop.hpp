@@ -30,7 +30,7 @@ struct HopGroup {
 struct HopResult {
   std::vector<double> density;
   std::vector<std::int64_t> group;     // per particle: its group in `groups`, or -1
-  std::vector<HopGroup> groups;        // largest first (ties: the lower peak index)
+  std::vector<HopGroup> groups;        // largest first (ties: the group of the lower peak index)
 };
 
 // Densities with the M4 spline over each particle's n_dens nearest (h = half the distance to
@@ -38,7 +38,9 @@ struct HopResult {
 // j = i included. The same for any thread count.
 std::vector<double> hop_densities(std::span<const Vec3> x, std::span<const double> mass, int n_dens, double box);
 
-// HOP's groups, as the authors' hop and regroup programs make them (docs/groups.md).
+// HOP's groups, as the authors' hop and regroup programs make them (docs/groups.md); ties in
+// distance and density go to the lower index (find_hop_groups_across_ranks alone, with the
+// indices as IDs).
 HopResult find_hop_groups(std::span<const Vec3> x, std::span<const double> mass, const HopParameters& p);
 
 }  // namespace fountain::groups

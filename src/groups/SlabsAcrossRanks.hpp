@@ -69,6 +69,7 @@ class Slabs {
   Slabs(std::span<const double> x, double box, Collectives* ranks);
 
   int count() const { return static_cast<int>(first_bin_.size()) - 1; }
+  double extent() const { return width_; }  // of the slabs together, in x
   int of(double x) const { return slab_of_bin_[static_cast<std::size_t>(bin(x))]; }
 
   // Whether x lies within `reach` of slab q (nearest images when periodic).

@@ -1,4 +1,4 @@
-// Friends-of-friends over particles spread across ranks (ranks run as threads) against one rank's catalogue, bit for bit, and against brute-force linking.
+// The group finders over particles spread across ranks (ranks run as threads) against one process's catalogues, bit for bit, and friends-of-friends against brute-force linking.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +11,7 @@
 
 #include "ThreadRanks.hpp"
 #include "groups/FofAcrossRanks.hpp"
+#include "groups/HopAcrossRanks.hpp"
 
 namespace fountain::groups {
 namespace {
@@ -177,6 +178,70 @@ TEST(FofAcrossRanks, SlabsThinnerThanTheLinkingLength) {
   std::vector<ParticleSet> lopsided(3);
   lopsided[2] = all;
   expect_same(across(lopsided, p), alone);
+}
+
+HopCatalogue hop_across(const std::vector<ParticleSet>& shares, const HopParameters& p) {
+  ThreadRanks threads(static_cast<int>(shares.size()));
+  HopCatalogue on_rank0;
+  threads.run([&](ThreadRanks::Messages& m) {
+    const ParticleSet& mine = shares[static_cast<std::size_t>(m.rank())];
+    // Gas carries hidden stars of a tenth of its mass.
+    std::vector<double> hidden(mine.size());
+    for (std::size_t i = 0; i < mine.size(); ++i) hidden[i] = mine.type[i] == 0 ? 0.1 * mine.mass[i] : 0.0;
+    HopCatalogue c = find_hop_groups_across_ranks(mine, hidden, p, &m);
+    if (m.rank() == 0) on_rank0 = std::move(c);
+    else EXPECT_TRUE(c.groups.empty());
+  });
+  return on_rank0;
+}
+
+void expect_same(const HopCatalogue& a, const HopCatalogue& b) {
+  ASSERT_EQ(a.groups.size(), b.groups.size());
+  EXPECT_EQ(a.member_id, b.member_id);
+  EXPECT_EQ(a.member_type, b.member_type);
+  EXPECT_EQ(a.member_density, b.member_density);
+  for (std::size_t g = 0; g < a.groups.size(); ++g) {
+    const HopCatalogueGroup &x = a.groups[g], &y = b.groups[g];
+    SCOPED_TRACE(::testing::Message() << "HOP group " << g);
+    EXPECT_EQ(x.mass, y.mass);
+    EXPECT_EQ(x.mass_by_type, y.mass_by_type);
+    EXPECT_EQ(x.count_by_type, y.count_by_type);
+    EXPECT_EQ(x.peak_density, y.peak_density);
+    EXPECT_EQ(x.peak_member, y.peak_member);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_EQ(x.peak[k], y.peak[k]);
+      EXPECT_EQ(x.centre_of_mass[k], y.centre_of_mass[k]);
+      EXPECT_EQ(x.velocity[k], y.velocity[k]);
+    }
+    EXPECT_EQ(x.members, y.members);
+  }
+}
+
+// Gas and stars in clumps over a background, some across the box's corner: HOP's groups on
+// 1 to 4 ranks are one process's, with densities, peaks and centres to the bit; at the
+// thresholds chosen the clumps are several groups, some merged through saddles, and the
+// margins must widen in the sparse background.
+TEST(HopAcrossRanks, OneToFourRanksGiveOneProcesssCatalogue) {
+  for (const double box : {1.0, 0.0}) {
+    SCOPED_TRACE(box > 0.0 ? "periodic" : "open");
+    ParticleSet all = clustered_set(6000, 1.0, 12);
+    for (std::size_t i = 0; i < all.size(); ++i) all.type[i] = i % 5 == 0 ? 4 : 0;
+    HopParameters p;
+    p.box = box;
+    const double mean = 6000.0 * 0.5;  // about: masses 0.2 to 1.5
+    p.delta_outer = 20.0 * mean, p.delta_saddle = 2.5 * p.delta_outer, p.delta_peak = 3.0 * p.delta_outer;
+    std::vector<ParticleSet> one(1, all);
+    const HopCatalogue alone = hop_across(one, p);
+    ASSERT_GE(alone.groups.size(), 4u);
+    std::size_t members = 0;
+    for (const HopCatalogueGroup& g : alone.groups) members += g.members.size();
+    EXPECT_GT(members, 1000u);
+    EXPECT_LT(members, all.size() * 3 / 4);  // not the uniform third
+    for (int ranks = 2; ranks <= 4; ++ranks) {
+      SCOPED_TRACE(::testing::Message() << ranks << " ranks");
+      expect_same(hop_across(dealt(all, ranks, 70 + static_cast<std::uint64_t>(ranks)), p), alone);
+    }
+  }
 }
 
 TEST(FofAcrossRanks, SumInAnyOrderIsTheSameForEverySplit) {
