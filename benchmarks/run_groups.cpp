@@ -3,9 +3,8 @@
 // z = 0 box: half the dark matter in Hernquist halos whose particle counts follow dn/dn ~ n^-1.9
 // from 32 to 10^5 (a concentration of 7 within the radius of 200 times the mean density), the
 // rest uniform; each gas particle sits near a dark matter one (a tenth of the spacing away).
-// Under mpirun each rank keeps every R-th particle and friends-of-friends runs across the
-// ranks (HOP, which runs in one process, is then skipped); the peak memory is the largest
-// rank's. Usage: [mpirun -np R] fountain_group_bench [-n 128] [--threads N] [--json FILE].
+// Under mpirun each rank keeps every R-th particle and both finders run across the ranks;
+// the peak memory is the largest rank's. Usage: [mpirun -np R] fountain_group_bench [-n 128] [--threads N] [--json FILE].
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 #include <sys/resource.h>
@@ -23,6 +22,7 @@
 #include "groups/FofAcrossRanks.hpp"
 #include "groups/FofCatalogue.hpp"
 #include "groups/Hop.hpp"
+#include "groups/HopAcrossRanks.hpp"
 
 namespace {
 
@@ -106,22 +106,19 @@ int main(int argc, char** argv) {
     const auto& fof_groups = found.groups;
     const double fof_s = seconds_since(t0);
 
-    double hop_s = 0.0;
-    fountain::groups::HopResult hop_groups;
-    if (!exchange) {
-      std::vector<Vec3> gas(set.x.begin() + static_cast<std::ptrdiff_t>(total), set.x.end());
-      std::vector<double> gas_mass(total, 0.15);
-      const double mean = 0.15 * static_cast<double>(total) / (box * box * box);
-      fountain::groups::HopParameters hop;
-      hop.box = box;
-      hop.delta_outer = 80.0 * mean;
-      hop.delta_saddle = 2.5 * hop.delta_outer;
-      hop.delta_peak = 3.0 * hop.delta_outer;
-      t0 = std::chrono::steady_clock::now();
-      hop_groups = fountain::groups::find_hop_groups(gas, gas_mass, hop);
-      hop_s = seconds_since(t0);
-    }
-
+    fountain::groups::ParticleSet gas;
+    for (std::size_t i = 0; i < set.size(); ++i)
+      if (set.type[i] == 0) gas.push_back(set.x[i], set.v[i], set.mass[i], set.id[i], 0);
+    const std::vector<double> hidden(gas.size(), 0.0);
+    const double mean = 0.15 * static_cast<double>(total) / (box * box * box);
+    fountain::groups::HopParameters hop;
+    hop.box = box;
+    hop.delta_outer = 80.0 * mean;
+    hop.delta_saddle = 2.5 * hop.delta_outer;
+    hop.delta_peak = 3.0 * hop.delta_outer;
+    t0 = std::chrono::steady_clock::now();
+    const fountain::groups::HopCatalogue hop_groups = fountain::groups::find_hop_groups_across_ranks(gas, hidden, hop, ranks.get());
+    const double hop_s = seconds_since(t0);
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     double peak_mb = static_cast<double>(usage.ru_maxrss) / 1024.0;
@@ -133,7 +130,7 @@ int main(int argc, char** argv) {
         "\"fof_groups\": {}, \"fof_largest\": {}, \"hop_particles\": {}, \"hop_s\": {:.3f}, \"hop_groups\": {}, "
         "\"hop_largest\": {}, \"peak_rss_mb\": {:.1f}}}\n",
         2 * total, exchange ? exchange->size() : 1, threads, fof_s, fof_groups.size(),
-        fof_groups.empty() ? 0 : fof_groups[0].members.size(), exchange ? 0 : total, hop_s, hop_groups.groups.size(),
+        fof_groups.empty() ? 0 : fof_groups[0].members.size(), total, hop_s, hop_groups.groups.size(),
         hop_groups.groups.empty() ? 0 : hop_groups.groups[0].members.size(), peak_mb);
     fountain::bench::report_json(mpi, json, json_path);
     return 0;

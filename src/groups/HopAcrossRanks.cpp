@@ -186,17 +186,20 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
   const std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(p.n_dens), total);
 
   // The particles this rank reads: its own and copies of others' within `margin` of its slab,
-  // by ID. The margin starts at three mean spacings and widens, once, to what the particles
-  // whose neighbours reached beyond it need (their k-th neighbour found among too few
-  // particles is no nearer than the true one, so the second margin suffices).
+  // by ID. The margin starts at three mean spacings and widens to what the particles whose
+  // neighbours reached beyond it need: their k-th neighbour found among too few particles is
+  // no nearer than the true one, so the next margin suffices for them. A particle's list, once
+  // found inside the margin, holds; the next attempt moves it to the wider set's places.
   std::vector<Particle> copies;
   std::vector<int> copy_from;                     // each copy's rank
   std::vector<std::vector<std::uint32_t>> sent;   // own particles copied to each rank
   std::vector<std::uint32_t> local;               // own (index < n_own) and copies (n_own + index), by ID
   std::vector<Vec3> xs;
-  std::vector<std::uint32_t> row;                 // each own particle's k nearest, as places in `local`
+  std::vector<std::uint32_t> row(n_own * k, 0);   // each own particle's k nearest, as places in `local`
   std::vector<double> h(n_own);
   std::vector<std::uint32_t> place_of_own(n_own);  // own particle's place in `local`
+  std::vector<char> listed(n_own, 0);              // its list is found and complete
+  std::vector<std::uint64_t> listed_ids;           // the last attempt's `local`, as IDs
   auto particle = [&](std::uint32_t at) -> const Particle& { return at < n_own ? own[at] : copies[at - n_own]; };
   double margin = 3.0 * slabs.extent() / std::cbrt(static_cast<double>(total));
   for (int attempt = 0;; ++attempt) {
@@ -219,44 +222,75 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
         if (q != me) copy_from.insert(copy_from.end(), all_sizes[static_cast<std::size_t>(q * count + me)], q);
       if (copy_from.size() != copies.size()) throw std::logic_error("HOP: copies and their ranks disagree");
     }
-    local.resize(n_own + copies.size());
-    for (std::size_t i = 0; i < local.size(); ++i) local[i] = static_cast<std::uint32_t>(i);
-    std::sort(local.begin(), local.end(), [&](std::uint32_t a, std::uint32_t b) {
+    // Own particles are in ID order already: the copies sorted, then the two merged.
+    std::vector<std::uint32_t> by_id(copies.size());
+    for (std::size_t c = 0; c < copies.size(); ++c) by_id[c] = static_cast<std::uint32_t>(n_own + c);
+    auto before = [&](std::uint32_t a, std::uint32_t b) {
       return std::tie(particle(a).id, particle(a).origin) < std::tie(particle(b).id, particle(b).origin);
-    });
+    };
+    std::sort(by_id.begin(), by_id.end(), before);
+    local.resize(n_own + copies.size());
+    {
+      std::size_t i = 0, c = 0, t = 0;
+      while (i < n_own || c < by_id.size())
+        local[t++] = c == by_id.size() || (i < n_own && before(static_cast<std::uint32_t>(i), by_id[c])) ? static_cast<std::uint32_t>(i++)
+                                                                                                       : by_id[c++];
+    }
     xs.resize(local.size());
     for (std::size_t t = 0; t < local.size(); ++t) {
       xs[t] = particle(local[t]).x;
       if (local[t] < n_own) place_of_own[local[t]] = static_cast<std::uint32_t>(t);
     }
-    bool short_of = local.size() < k;
+    if (attempt > 0) {
+      // The wider set holds the narrower one: both by ID, so one pass finds the new places.
+      std::vector<std::uint32_t> moved(listed_ids.size());
+      for (std::size_t o = 0, t = 0; o < listed_ids.size(); ++o) {
+        while (particle(local[t]).id != listed_ids[o]) ++t;
+        moved[o] = static_cast<std::uint32_t>(t);
+      }
+      for (std::size_t i = 0; i < n_own; ++i)
+        if (listed[i])
+          for (std::size_t n = 0; n < k; ++n) row[i * k + n] = moved[row[i * k + n]];
+    }
+    listed_ids.resize(local.size());
+    for (std::size_t t = 0; t < local.size(); ++t) listed_ids[t] = particle(local[t]).id;
+    const bool short_of = local.size() < k;
     double needed = 0.0;
     if (!short_of) {
+      // In the tree's order: neighbouring queries share the nodes they visit.
       const NearestNeighbours tree(xs, box);
-      row.assign(n_own * k, 0);
+      const std::vector<std::uint32_t>& order = tree.order();
       std::vector<double> reach(n_own, 0.0);
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n_own, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<NearestNeighbours::Neighbour> found;
         NearestNeighbours::SearchStack stack;
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        for (std::size_t at = r.begin(); at != r.end(); ++at) {
+          const std::uint32_t i = local[order[at]];
+          if (i >= n_own || listed[i]) continue;
           tree.nearest(own[i].x, k, found, stack);
           for (std::size_t n = 0; n < k; ++n) row[i * k + n] = found[n].index;
           const double r_k = std::sqrt(found.back().distance2);
           h[i] = 0.5 * r_k;
-          if (count > 1) reach[i] = r_k - slabs.depth(own[i].x.x, me);
+          reach[i] = ranks == nullptr || count == 1 ? 0.0 : r_k - slabs.depth(own[i].x.x, me);
+          listed[i] = reach[i] < margin * (1.0 - 1e-9);
         }
       });
-      for (double r : reach) needed = std::max(needed, r);
+      for (std::size_t i = 0; i < n_own; ++i)
+        if (!listed[i]) needed = std::max(needed, reach[i]);
     }
     // Complete where every own particle's ball of its k nearest lies inside the margin.
-    const bool complete = ranks == nullptr || count == 1 || (!short_of && needed < margin * (1.0 - 1e-9));
-    std::vector<double> asks{complete ? 0.0 : (short_of ? 2.0 * margin : std::max(2.0 * margin, 1.01 * needed))};
+    const bool complete = !short_of && std::all_of(listed.begin(), listed.end(), [](char c) { return c != 0; });
+    std::vector<double> asks{complete ? 0.0 : (short_of ? 2.0 * margin : std::max(1.1 * margin, 1.01 * needed))};
     if (ranks != nullptr) asks = gather_all(asks, ranks);
     const double widest = *std::max_element(asks.begin(), asks.end());
     if (widest == 0.0) break;
-    if (attempt > 64) throw std::logic_error("HOP: the margins did not converge");
+    if (ranks == nullptr || attempt > 64) throw std::logic_error("HOP: the margins did not converge");
     margin = widest;
   }
+  std::vector<std::uint64_t>().swap(listed_ids);
+  std::vector<char>().swap(listed);
+  std::vector<double> ms(local.size());  // HOP masses by place
+  for (std::size_t t = 0; t < local.size(); ++t) ms[t] = particle(local[t]).hop_m;
   const NearestNeighbours tree(xs, box);
 
   // Densities: each particle's own smoothing over its list, then what each list hands out
@@ -269,7 +303,7 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
       const std::uint32_t* list = &row[i * k];
       double sum = 0.0;
       for (std::size_t n = 0; n < k; ++n)
-        sum += 0.5 * particle(local[list[n]]).hop_m * spline(norm(tree.separation(own[i].x, xs[list[n]])), h[i]);
+        sum += 0.5 * ms[list[n]] * spline(norm(tree.separation(own[i].x, xs[list[n]])), h[i]);
       rho[i] = sum;
     }
   });
@@ -402,15 +436,17 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
   // itself) across two groups, over every rank.
   std::map<std::pair<std::size_t, std::size_t>, double> boundary;
   {
-    std::vector<std::size_t> copy_group(copies.size());
-    for (std::size_t c = 0; c < copies.size(); ++c) copy_group[c] = number.at(peak_of(copies[c].id, true));
-    auto group_of_place = [&](std::uint32_t place) {
-      const std::uint32_t t = local[place];
-      return t < n_own ? number.at(peak[t]) : copy_group[t - n_own];
-    };
+    std::vector<std::size_t> group_of(local.size());  // by place
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, local.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t place = r.begin(); place != r.end(); ++place) {
+        const std::uint32_t t = local[place];
+        group_of[place] = number.at(t < n_own ? peak[t] : peak_of(copies[t - n_own].id, true));
+      }
+    });
+    auto group_of_place = [&](std::uint32_t place) { return group_of[place]; };
     for (std::size_t i = 0; i < n_own; ++i) {
       int taken = 0;
-      const std::size_t a = number.at(peak[i]);
+      const std::size_t a = group_of[place_of_own[i]];
       for (std::size_t n = 0; n < k && taken < p.n_merge; ++n) {
         const std::uint32_t j = row[i * k + n];
         if (j == place_of_own[i]) continue;
