@@ -12,6 +12,7 @@
 #include "ThreadRanks.hpp"
 #include "groups/FofAcrossRanks.hpp"
 #include "groups/HopAcrossRanks.hpp"
+#include "groups/SlabsAcrossRanks.hpp"
 
 namespace fountain::groups {
 namespace {

@@ -15,6 +15,7 @@
 #include "groups/FofCatalogue.hpp"
 #include "groups/Hop.hpp"
 #include "groups/HopAcrossRanks.hpp"
+#include "groups/SlabsAcrossRanks.hpp"
 #include "io/GroupFiles.hpp"
 
 namespace fountain {

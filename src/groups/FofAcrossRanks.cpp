@@ -36,17 +36,6 @@ struct Record {
   std::int32_t type = 0, pad = 0;
 };
 
-// b - a as the nearest periodic image (as PointGrid::separation).
-Vec3 separation(const Vec3& a, const Vec3& b, double box) {
-  Vec3 d = b - a;
-  if (box > 0.0)
-    for (int k = 0; k < 3; ++k) {
-      if (d[k] > 0.5 * box) d[k] -= box;
-      else if (d[k] < -0.5 * box) d[k] += box;
-    }
-  return d;
-}
-
 Vec3 folded(const Vec3& x, double box) { return box > 0.0 ? wrap_into_box(x, Vec3{box, box, box}) : x; }
 
 // Union-find over particle IDs: a set's root is its smallest ID, whatever the order of the unions.
@@ -152,12 +141,6 @@ double sum_in_any_order(const std::vector<double>& mine, Collectives* ranks) {
   return static_cast<double>(total) / scale;
 }
 
-std::uint64_t count_over_ranks(std::uint64_t mine, Collectives* ranks) {
-  std::uint64_t total = 0;
-  for (std::uint64_t n : gather_all(std::vector<std::uint64_t>{mine}, ranks)) total += n;
-  return total;
-}
-
 GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofParameters& p, Collectives* ranks) {
   if (!(p.linking_length > 0.0)) throw InputError("friends-of-friends needs a positive linking length");
   const int count = ranks == nullptr ? 1 : ranks->size(), me = ranks == nullptr ? 0 : ranks->rank();
@@ -168,17 +151,7 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
   std::vector<Record> own(mine.size());
   for (std::size_t i = 0; i < mine.size(); ++i)
     own[i] = {mine.x[i], mine.v[i], mine.mass[i], mine.id[i], static_cast<std::uint64_t>(i), mine.type[i], 0};
-  std::vector<double> slab_x(own.size());
-  for (std::size_t i = 0; i < own.size(); ++i) slab_x[i] = own[i].x.x;
-  const Slabs slabs(slab_x, box, ranks);
-  std::vector<double>().swap(slab_x);
-  if (ranks != nullptr) {
-    std::vector<std::vector<Record>> to(static_cast<std::size_t>(count));
-    for (const Record& r : own) to[static_cast<std::size_t>(slabs.of(r.x.x))].push_back(r);
-    std::vector<Record>().swap(own);
-    own = exchange(to, ranks);
-  }
-  std::sort(own.begin(), own.end(), [](const Record& a, const Record& b) { return std::tie(a.id, a.origin) < std::tie(b.id, b.origin); });
+  const Slabs slabs = into_slabs(own, box, ranks);
 
   // Each own particle's group (its label) and the group's home, where it has enough primaries
   // (-1 elsewhere); what the linking needs is freed before the groups' properties are found.
@@ -329,7 +302,7 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
       s.smallest_id = at(0).id;
       for (std::size_t k = 0; k < n; ++k) {
         const Record& r = at(k);
-        local[k] = box > 0.0 ? separation(reference, r.x, box) : r.x - reference;
+        local[k] = nearest_image(reference, r.x, box);
         mass[k] = r.m;
         s.mass += mass[k];
         const auto t = static_cast<std::size_t>(std::clamp(r.type, 0, 5));
@@ -422,20 +395,9 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
   }
   std::vector<MemberRef>().swap(members);
   std::vector<Record>().swap(guests);
-  std::vector<GroupSummary> summaries;
-  std::vector<MemberName> all_names;
-  if (ranks == nullptr) {
-    summaries = std::move(summary);
-    all_names = std::move(names);
-  } else {
-    std::vector<std::vector<GroupSummary>> s_to(static_cast<std::size_t>(count));
-    std::vector<std::vector<MemberName>> n_to(static_cast<std::size_t>(count));
-    s_to[0] = std::move(summary);
-    n_to[0] = std::move(names);
-    summaries = exchange(s_to, ranks);
-    all_names = exchange(n_to, ranks);
-    if (me != 0) return {};
-  }
+  const std::vector<GroupSummary> summaries = on_rank_zero(std::move(summary), ranks);
+  const std::vector<MemberName> all_names = on_rank_zero(std::move(names), ranks);
+  if (me != 0) return {};
   std::vector<std::size_t> start(summaries.size() + 1, 0);
   for (std::size_t g = 0; g < summaries.size(); ++g) start[g + 1] = start[g] + summaries[g].members;
   if (start.back() != all_names.size()) throw std::logic_error("friends-of-friends: members and groups disagree");

@@ -33,7 +33,5 @@ GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofPa
 // split between ranks: each value is rounded to a multiple of 2^-62 of the largest of all and
 // the multiples are summed as integers (a relative rounding of at most 2^-62 per value).
 double sum_in_any_order(const std::vector<double>& mine, Collectives* ranks);
-// A count summed over every rank (this rank's alone when ranks is null).
-std::uint64_t count_over_ranks(std::uint64_t mine, Collectives* ranks);
 
 }  // namespace fountain::groups

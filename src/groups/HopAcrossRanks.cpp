@@ -16,7 +16,6 @@
 
 #include "core/Error.hpp"
 #include "core/PeriodicWrap.hpp"
-#include "groups/FofAcrossRanks.hpp"
 #include "groups/NearestNeighbours.hpp"
 #include "groups/SlabsAcrossRanks.hpp"
 
@@ -168,17 +167,7 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
     const Vec3 x = box > 0.0 ? wrap_into_box(mine.x[i], Vec3{box, box, box}) : mine.x[i];
     own[i] = {x, mine.v[i], mine.mass[i], mine.mass[i] + hidden[i], mine.id[i], static_cast<std::uint64_t>(i), mine.type[i], 0};
   }
-  std::vector<double> slab_x(own.size());
-  for (std::size_t i = 0; i < own.size(); ++i) slab_x[i] = own[i].x.x;
-  const Slabs slabs(slab_x, box, ranks);
-  std::vector<double>().swap(slab_x);
-  if (ranks != nullptr) {
-    std::vector<std::vector<Particle>> to(static_cast<std::size_t>(count));
-    for (const Particle& q : own) to[static_cast<std::size_t>(slabs.of(q.x.x))].push_back(q);
-    std::vector<Particle>().swap(own);
-    own = exchange(to, ranks);
-  }
-  std::sort(own.begin(), own.end(), [](const Particle& a, const Particle& b) { return std::tie(a.id, a.origin) < std::tie(b.id, b.origin); });
+  const Slabs slabs = into_slabs(own, box, ranks);
   const std::size_t n_own = own.size();
   const std::uint64_t total = count_over_ranks(n_own, ranks);
   HopCatalogue out;
@@ -542,15 +531,9 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
       names.push_back({members[m].p.id, members[m].p.origin, members[m].rho, members[m].p.type, 0});
   }
   std::vector<Member>().swap(members);
-  if (ranks != nullptr) {
-    std::vector<std::vector<Summary>> s_to(static_cast<std::size_t>(count));
-    std::vector<std::vector<MemberName>> n_to(static_cast<std::size_t>(count));
-    s_to[0] = std::move(kept);
-    n_to[0] = std::move(names);
-    kept = exchange(s_to, ranks);
-    names = exchange(n_to, ranks);
-    if (me != 0) return out;
-  }
+  kept = on_rank_zero(std::move(kept), ranks);
+  names = on_rank_zero(std::move(names), ranks);
+  if (me != 0) return out;
   std::vector<std::size_t> start(kept.size() + 1, 0);
   for (std::size_t g = 0; g < kept.size(); ++g) start[g + 1] = start[g] + kept[g].members;
   if (start.back() != names.size()) throw std::logic_error("HOP: members and groups disagree");

@@ -5,6 +5,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/PeriodicWrap.hpp"
 #include "core/Vec3.hpp"
 
 namespace fountain::groups {
@@ -36,15 +37,7 @@ class NearestNeighbours {
   const std::vector<std::uint32_t>& order() const { return order_; }
 
   // b - a at the nearest image.
-  Vec3 separation(const Vec3& a, const Vec3& b) const {
-    Vec3 d = b - a;
-    if (box_ > 0.0)
-      for (int k = 0; k < 3; ++k) {
-        if (d[k] > 0.5 * box_) d[k] -= box_;
-        else if (d[k] < -0.5 * box_) d[k] += box_;
-      }
-    return d;
-  }
+  Vec3 separation(const Vec3& a, const Vec3& b) const { return nearest_image(a, b, box_); }
 
  private:
   struct Node {

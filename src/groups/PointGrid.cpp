@@ -30,7 +30,6 @@ PointGrid::PointGrid(std::span<const Vec3> points, double cell_size, double box)
   if (!(cell_size > 0.0)) throw InputError("a point grid needs a positive cell size");
   if (points.size() >= std::numeric_limits<std::uint32_t>::max())
     throw InputError("a point grid holds fewer than 2^32 points");
-  half_box_ = 0.5 * box;
   Vec3 lo{}, hi{};
   if (box > 0.0) {
     const int n = static_cast<int>(std::clamp(std::floor(box / cell_size), 1.0, static_cast<double>(kMaxCellsPerSide)));

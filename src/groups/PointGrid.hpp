@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/PeriodicWrap.hpp"
 #include "core/Vec3.hpp"
 
 namespace fountain::groups {
@@ -35,15 +36,7 @@ class PointGrid {
   // The integer coordinates of the cell holding x (clamped into an open grid's range).
   std::array<int, 3> cell_of(const Vec3& x) const;
   // b - a, as the nearest periodic image when periodic.
-  Vec3 separation(const Vec3& a, const Vec3& b) const {
-    Vec3 d = b - a;
-    if (box_ > 0.0)
-      for (int k = 0; k < 3; ++k) {
-        if (d[k] > half_box_) d[k] -= box_;
-        else if (d[k] < -half_box_) d[k] += box_;
-      }
-    return d;
-  }
+  Vec3 separation(const Vec3& a, const Vec3& b) const { return nearest_image(a, b, box_); }
   double cell_size() const { return size_; }
   double box() const { return box_; }
   int cells_per_side(int k) const { return n_[static_cast<std::size_t>(k)]; }
@@ -73,7 +66,7 @@ class PointGrid {
   std::uint64_t key(std::array<int, 3> at) const;
   std::array<int, 3> fold(std::array<int, 3> at) const;
 
-  double size_ = 0.0, box_ = 0.0, half_box_ = 0.0;
+  double size_ = 0.0, box_ = 0.0;
   Vec3 origin_{};
   std::array<int, 3> n_{1, 1, 1};
   bool small_ = false;  // periodic with fewer than 5 cells on a side: lookups may repeat

@@ -114,4 +114,39 @@ class Slabs {
   std::vector<int> slab_of_bin_, first_bin_;
 };
 
+// A count summed over every rank (this rank's alone when ranks is null).
+inline std::uint64_t count_over_ranks(std::uint64_t mine, Collectives* ranks) {
+  std::uint64_t total = 0;
+  for (std::uint64_t n : gather_all(std::vector<std::uint64_t>{mine}, ranks)) total += n;
+  return total;
+}
+
+// Every rank's values on rank 0, in rank order; the other ranks get none (alone: `mine`).
+template <class T>
+std::vector<T> on_rank_zero(std::vector<T> mine, Collectives* ranks) {
+  if (ranks == nullptr) return mine;
+  std::vector<std::vector<T>> to(static_cast<std::size_t>(ranks->size()));
+  to[0] = std::move(mine);
+  return exchange(to, ranks);
+}
+
+// Slabs for `records` (each with a position x, an id and an origin), and the records sent to
+// their slabs' ranks: on return each rank holds its slab's, by (id, origin).
+template <class Record>
+Slabs into_slabs(std::vector<Record>& records, double box, Collectives* ranks) {
+  std::vector<double> x(records.size());
+  for (std::size_t i = 0; i < records.size(); ++i) x[i] = records[i].x.x;
+  Slabs slabs(x, box, ranks);
+  std::vector<double>().swap(x);
+  if (ranks != nullptr) {
+    std::vector<std::vector<Record>> to(static_cast<std::size_t>(ranks->size()));
+    for (const Record& r : records) to[static_cast<std::size_t>(slabs.of(r.x.x))].push_back(r);
+    std::vector<Record>().swap(records);
+    records = exchange(to, ranks);
+  }
+  std::sort(records.begin(), records.end(),
+            [](const Record& a, const Record& b) { return a.id < b.id || (a.id == b.id && a.origin < b.origin); });
+  return slabs;
+}
+
 }  // namespace fountain::groups
