@@ -243,6 +243,16 @@ TEST(HopAcrossRanks, OneToFourRanksGiveOneProcesssCatalogue) {
       expect_same(hop_across(dealt(all, ranks, 70 + static_cast<std::uint64_t>(ranks)), p), alone);
     }
   }
+  // Every particle within one 4096th of the box in x: one slab holds them all, and the other
+  // ranks own empty slabs.
+  ParticleSet flat = clustered_set(3000, 1.0, 13);
+  for (std::size_t i = 0; i < flat.size(); ++i) flat.x[i].x = 0.5 + 1e-4 * flat.x[i].x;
+  HopParameters p;
+  p.box = 1.0;
+  p.delta_outer = 1e6, p.delta_saddle = 2.5e6, p.delta_peak = 3e6;
+  const HopCatalogue alone = hop_across(std::vector<ParticleSet>(1, flat), p);
+  ASSERT_GE(alone.groups.size(), 1u);
+  expect_same(hop_across(dealt(flat, 3, 90), p), alone);
 }
 
 TEST(FofAcrossRanks, SumInAnyOrderIsTheSameForEverySplit) {

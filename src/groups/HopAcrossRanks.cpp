@@ -243,7 +243,7 @@ HopCatalogue find_hop_groups_across_ranks(const ParticleSet& mine, std::span<con
     }
     listed_ids.resize(local.size());
     for (std::size_t t = 0; t < local.size(); ++t) listed_ids[t] = particle(local[t]).id;
-    const bool short_of = local.size() < k;
+    const bool short_of = n_own > 0 && local.size() < k;  // a rank with no particles needs no list
     double needed = 0.0;
     if (!short_of) {
       // In the tree's order: neighbouring queries share the nodes they visit.
