@@ -68,15 +68,21 @@ FofParameters parameters(double box) {
   return p;
 }
 
-GroupCatalogue across(const std::vector<ParticleSet>& shares, const FofParameters& p) {
+// `find(mine, ranks)` on every rank (ranks as threads): rank 0's catalogue; the others' must be empty.
+template <class Find>
+auto on_ranks(const std::vector<ParticleSet>& shares, Find&& find) {
   ThreadRanks threads(static_cast<int>(shares.size()));
-  GroupCatalogue on_rank0;
+  decltype(find(shares[0], nullptr)) on_rank0;
   threads.run([&](ThreadRanks::Messages& m) {
-    GroupCatalogue c = find_fof_groups_across_ranks(shares[static_cast<std::size_t>(m.rank())], p, &m);
+    auto c = find(shares[static_cast<std::size_t>(m.rank())], &m);
     if (m.rank() == 0) on_rank0 = std::move(c);
     else EXPECT_TRUE(c.groups.empty());
   });
   return on_rank0;
+}
+
+GroupCatalogue across(const std::vector<ParticleSet>& shares, const FofParameters& p) {
+  return on_ranks(shares, [&](const ParticleSet& mine, Collectives* ranks) { return find_fof_groups_across_ranks(mine, p, ranks); });
 }
 
 void expect_same(const GroupCatalogue& a, const GroupCatalogue& b) {
@@ -182,18 +188,12 @@ TEST(FofAcrossRanks, SlabsThinnerThanTheLinkingLength) {
 }
 
 HopCatalogue hop_across(const std::vector<ParticleSet>& shares, const HopParameters& p) {
-  ThreadRanks threads(static_cast<int>(shares.size()));
-  HopCatalogue on_rank0;
-  threads.run([&](ThreadRanks::Messages& m) {
-    const ParticleSet& mine = shares[static_cast<std::size_t>(m.rank())];
+  return on_ranks(shares, [&](const ParticleSet& mine, Collectives* ranks) {
     // Gas carries hidden stars of a tenth of its mass.
     std::vector<double> hidden(mine.size());
     for (std::size_t i = 0; i < mine.size(); ++i) hidden[i] = mine.type[i] == 0 ? 0.1 * mine.mass[i] : 0.0;
-    HopCatalogue c = find_hop_groups_across_ranks(mine, hidden, p, &m);
-    if (m.rank() == 0) on_rank0 = std::move(c);
-    else EXPECT_TRUE(c.groups.empty());
+    return find_hop_groups_across_ranks(mine, hidden, p, ranks);
   });
-  return on_rank0;
 }
 
 void expect_same(const HopCatalogue& a, const HopCatalogue& b) {

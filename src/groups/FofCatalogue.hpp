@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "core/Vec3.hpp"
-#include "groups/PointGrid.hpp"
 
 namespace fountain::groups {
 
@@ -58,18 +57,15 @@ double linking_length(double b, double mean_mass, double mean_density);
 // (find_fof_groups_across_ranks alone).
 std::vector<Group> find_fof_groups(const ParticleSet& particles, const FofParameters& p);
 
-// The radius about `centre` within which the mean density of `grid`'s particles first falls
-// to `density` (the enclosed mass is a step function of r, so R = (3 M / (4 pi density))^(1/3)
-// for the mass M inside the first shell where it drops), and that mass. The search starts at
-// start_radius and widens as needed, up to half a periodic box.
+// The radius about a centre within which the mean density of the particles first falls to a
+// threshold density (the enclosed mass is a step function of r, so R = (3 M / (4 pi density))^(1/3)
+// for the mass M inside the first shell where it drops), and that mass, from the (r, m) of
+// every particle within `radius` of the centre, sorted: the answer, or nothing when the mean
+// density is still above the threshold (shell = 4 pi density / 3) at `radius` < `limit`, half
+// a periodic box. The answer does not depend on `radius` once there is one.
 struct SphericalOverdensity {
   double radius = 0.0, mass = 0.0;
 };
-SphericalOverdensity spherical_overdensity(const PointGrid& grid, const ParticleSet& particles, const Vec3& centre,
-                                           double density, double start_radius);
-// The same from the (r, m) of every particle within `radius` of the centre, sorted: the
-// answer, or nothing when the mean density is still above the threshold (shell = 4 pi
-// density / 3) at `radius` < `limit`. The answer does not depend on `radius` once there is one.
 std::optional<SphericalOverdensity> overdensity_crossing(std::span<const std::pair<double, double>> inside, double radius,
                                                          double limit, double shell);
 
