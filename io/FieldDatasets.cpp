@@ -12,8 +12,9 @@ std::vector<std::int32_t> as_int32(std::span<const T> v) {
 
 // Small integers come back through doubles, which hold every int32 exactly.
 template <class T>
-void read_small_integers(const hdf5::File& f, const std::string& dataset, std::vector<T>& v) {
-  const std::vector<double> raw = f.read_doubles(dataset);
+void read_small_integers(const hdf5::File& f, const std::string& dataset, std::vector<T>& v,
+                         const hdf5::RowRange* rows) {
+  const std::vector<double> raw = f.read_doubles(dataset, rows);
   v.assign(raw.size(), T{});
   for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<T>(static_cast<int>(raw[k]));
 }
@@ -60,24 +61,31 @@ void write_field_rows(hdf5::File& f, const std::string& dataset, std::size_t fir
   f.write_rows(dataset, first, std::span<const std::int32_t>(as_int32(v)));
 }
 
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<double>& v) { v = f.read_doubles(dataset); }
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Vec3>& v) { v = f.read_vec3(dataset); }
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint64_t>& v) {
-  v = f.read_uint64(dataset);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<double>& v, const hdf5::RowRange* rows) {
+  v = f.read_doubles(dataset, rows);
 }
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::int64_t>& v) {
-  const std::vector<std::uint64_t> raw = f.read_uint64(dataset);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Vec3>& v, const hdf5::RowRange* rows) {
+  v = f.read_vec3(dataset, rows);
+}
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint64_t>& v,
+                const hdf5::RowRange* rows) {
+  v = f.read_uint64(dataset, rows);
+}
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::int64_t>& v,
+                const hdf5::RowRange* rows) {
+  const std::vector<std::uint64_t> raw = f.read_uint64(dataset, rows);
   v.assign(raw.size(), 0);
   for (std::size_t k = 0; k < raw.size(); ++k) v[k] = static_cast<std::int64_t>(raw[k]);
 }
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<TimeBin>& v) {
-  read_small_integers(f, dataset, v);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<TimeBin>& v, const hdf5::RowRange* rows) {
+  read_small_integers(f, dataset, v, rows);
 }
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint8_t>& v) {
-  read_small_integers(f, dataset, v);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint8_t>& v,
+                const hdf5::RowRange* rows) {
+  read_small_integers(f, dataset, v, rows);
 }
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Species>& v) {
-  read_small_integers(f, dataset, v);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Species>& v, const hdf5::RowRange* rows) {
+  read_small_integers(f, dataset, v, rows);
 }
 
 }  // namespace fountain::io

@@ -51,13 +51,20 @@ void create_field(hdf5::File& f, const std::string& dataset, std::size_t rows, c
   }
 }
 
-// Reads back what write_field wrote, into the field's own type.
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<double>& v);
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Vec3>& v);
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint64_t>& v);
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::int64_t>& v);
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<TimeBin>& v);
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint8_t>& v);
-void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Species>& v);
+// Reads back what write_field wrote, into the field's own type; with `rows`, only those rows.
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<double>& v,
+                const hdf5::RowRange* rows = nullptr);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Vec3>& v,
+                const hdf5::RowRange* rows = nullptr);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint64_t>& v,
+                const hdf5::RowRange* rows = nullptr);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::int64_t>& v,
+                const hdf5::RowRange* rows = nullptr);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<TimeBin>& v,
+                const hdf5::RowRange* rows = nullptr);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<std::uint8_t>& v,
+                const hdf5::RowRange* rows = nullptr);
+void read_field(const hdf5::File& f, const std::string& dataset, std::vector<Species>& v,
+                const hdf5::RowRange* rows = nullptr);
 
 }  // namespace fountain::io

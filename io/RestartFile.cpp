@@ -77,10 +77,24 @@ void add_to_checksum(Checksum& c, const Particles& p) {
   for_each_restart_field(p, [&](const char*, const auto& field) { c.add(field); });
 }
 
+// Writes the restart fields of `p` (its rows `rows`, in that order, or all of them) and adds
+// them to the checksum, each field as add_to_checksum adds it: a field of the rows is gathered
+// alone, so the store is never copied whole.
 template <class Particles>
-void write_particles(hdf5::File& f, const std::string& group, const Particles& p) {
+void write_particles(hdf5::File& f, const std::string& group, const Particles& p, Checksum& c,
+                     const std::vector<std::size_t>* rows = nullptr) {
   f.create_group(group);
-  for_each_restart_field(p, [&](const char* name, const auto& field) { write_field(f, group + "/" + name, field); });
+  for_each_restart_field(p, [&](const char* name, const auto& field) {
+    if (rows == nullptr) {
+      write_field(f, group + "/" + name, field);
+      c.add(field);
+      return;
+    }
+    std::decay_t<decltype(field)> picked(rows->size());
+    for (std::size_t k = 0; k < rows->size(); ++k) picked[k] = field[(*rows)[k]];
+    write_field(f, group + "/" + name, picked);
+    c.add(picked);
+  });
 }
 
 // Reads every field of `group`; each must hold `count` entries (the count in /Restart).
@@ -100,22 +114,66 @@ Particles read_particles(const hdf5::File& f, const std::string& path, const std
   return p;
 }
 
-std::string scalars_checksum_text(const RestartState& s) {
+// n_gas and n_dm: the whole run's particle counts.
+std::string scalars_checksum_text(const RestartState& s, std::uint64_t n_gas, std::uint64_t n_dm) {
   std::string text = fmt::format("{} {} {} {} {} {} {} {:a} {} {} {}", s.ti_current, s.ti_step_begin, s.steps,
-                                 s.snapshots_written, s.next_output, s.gas.size(), s.dm.size(), s.radiated_energy,
+                                 s.snapshots_written, s.next_output, n_gas, n_dm, s.radiated_energy,
                                  s.next_particle_id, s.mesh_step_bin, s.mesh_step_begin);
   for (double v : tally_values(s.star_formation)) text += fmt::format(" {:a}", v);
   return text;
 }
 
-std::string checksum(const RestartState& s) {
-  Checksum c;
-  const std::string scalars = scalars_checksum_text(s);
+void add_scalars_to_checksum(Checksum& c, const RestartState& s, std::uint64_t n_gas, std::uint64_t n_dm) {
+  const std::string scalars = scalars_checksum_text(s, n_gas, n_dm);
   c.add(scalars.data(), scalars.size());
   c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
+}
+
+std::string checksum(const RestartState& s) {
+  Checksum c;
+  add_scalars_to_checksum(c, s, s.gas.size(), s.dm.size());
   add_to_checksum(c, s.gas);
   add_to_checksum(c, s.dm);
   return c.hex();
+}
+
+// Reads every field of `group` (each must hold `count` rows) a run of rows at a time, adds
+// every row to the checksum as checksum() adds the whole field, and keeps the rows of `keep`:
+// the memory this takes is the share plus one run of rows of one field.
+template <class Particles>
+Particles read_particle_rows(const hdf5::File& f, const std::string& path, const std::string& group,
+                             std::uint64_t count, hdf5::RowRange keep, std::uint64_t rows_per_read, Checksum& c,
+                             const char* noun) {
+  Particles p;
+  for_each_restart_field(p, [&](const char* name, auto& field) {
+    const std::string dataset = group + "/" + name;
+    if (!f.exists(dataset)) throw InputError(fmt::format("{}: {} not found (restart file incomplete)", path, dataset));
+    const std::uint64_t rows = f.dataset_info(dataset).rows();
+    if (rows != count)
+      throw InputError(fmt::format("{}: {} has {} entries, but the file holds {} {} particles", path, dataset, rows,
+                                   count, noun));
+    field.reserve(keep.count);
+    std::remove_reference_t<decltype(field)> run;
+    for (std::uint64_t first = 0; first < count; first += rows_per_read) {
+      const hdf5::RowRange range{first, std::min(rows_per_read, count - first)};
+      read_field(f, dataset, run, &range);
+      c.add(run);
+      const std::uint64_t from = std::max(first, keep.first), to = std::min(first + range.count, keep.first + keep.count);
+      if (from < to)
+        field.insert(field.end(), run.begin() + static_cast<std::ptrdiff_t>(from - first),
+                     run.begin() + static_cast<std::ptrdiff_t>(to - first));
+    }
+  });
+  p.resize(keep.count);  // the fields restart files do not hold
+  return p;
+}
+
+// Rank r's share of n rows among `ranks`: [n r / ranks, n (r + 1) / ranks), as the initial
+// conditions are shared.
+hdf5::RowRange share_of_rows(std::uint64_t n, const RestartShare& share) {
+  const auto r = static_cast<std::uint64_t>(share.rank), ranks = static_cast<std::uint64_t>(share.ranks);
+  const std::uint64_t first = n * r / ranks;
+  return {first, n * (r + 1) / ranks - first};
 }
 
 }  // namespace
@@ -144,7 +202,8 @@ void write_scalars(hdf5::File& f, const RestartState& s, std::uint64_t n_gas, st
 std::string master_checksum(const RestartState& s, std::uint64_t n_gas, std::uint64_t n_dm, long long serial,
                             const std::string& names) {
   Checksum c;
-  const std::string scalars = scalars_checksum_text(s) + fmt::format(" {} {} {} {}", n_gas, n_dm, serial, names);
+  const std::string scalars = scalars_checksum_text(s, s.gas.size(), s.dm.size()) +
+                              fmt::format(" {} {} {} {}", n_gas, n_dm, serial, names);
   c.add(scalars.data(), scalars.size());
   c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
   return c.hex();
@@ -199,12 +258,17 @@ void append_restart_fields(Particles& whole, Particles& part) {
 
 }  // namespace
 
-void write_restart(const std::string& path, const RestartState& s) {
+void write_restart(const std::string& path, const RestartState& s) { write_restart(path, s, s.gas, s.dm); }
+
+void write_restart(const std::string& path, const RestartState& s, const GasParticles& gas,
+                   const CollisionlessParticles& dm) {
   hdf5::write_file_atomically(path, "restart file", [&](hdf5::File& f) {
-    write_scalars(f, s, s.gas.size(), s.dm.size());
-    f.write_attribute("/Restart", "Checksum", checksum(s));
-    write_particles(f, kGasGroup, s.gas);
-    write_particles(f, kDarkMatterGroup, s.dm);
+    write_scalars(f, s, gas.size(), dm.size());
+    Checksum c;
+    add_scalars_to_checksum(c, s, gas.size(), dm.size());
+    write_particles(f, kGasGroup, gas, c);
+    write_particles(f, kDarkMatterGroup, dm, c);
+    f.write_attribute("/Restart", "Checksum", c.hex());
   });
 }
 
@@ -213,18 +277,37 @@ std::string restart_piece_name(const std::string& path, long long serial, int ra
   return fmt::format("{}_{:06d}_rank{}.hdf5", stem, serial, rank);
 }
 
-void write_restart_piece(const std::string& piece_path, const RestartPiece& p) {
+namespace {
+void write_piece(const std::string& piece_path, const GasParticles& gas, const std::vector<std::size_t>* gas_rows,
+                 const CollisionlessParticles& dm, const std::vector<std::size_t>* dm_rows,
+                 const std::vector<std::uint64_t>& gas_index, const std::vector<std::uint64_t>& dm_index) {
+  const std::size_t n_gas = gas_rows ? gas_rows->size() : gas.size(), n_dm = dm_rows ? dm_rows->size() : dm.size();
+  if (gas_index.size() != n_gas || dm_index.size() != n_dm)
+    throw std::logic_error(fmt::format("{}: a restart piece of {} and {} particles with {} and {} places", piece_path,
+                                       n_gas, n_dm, gas_index.size(), dm_index.size()));
   hdf5::write_file_atomically(piece_path, "restart piece", [&](hdf5::File& f) {
     f.create_group("/Piece");
     f.write_attribute("/Piece", "FormatVersion", kRestartFormatVersion);
-    f.write_attribute("/Piece", "GasParticles", static_cast<std::int64_t>(p.gas.size()));
-    f.write_attribute("/Piece", "CollisionlessParticles", static_cast<std::int64_t>(p.dm.size()));
-    f.write_attribute("/Piece", "Checksum", piece_checksum(p));
-    f.write_dataset("/Piece/GasIndex", p.gas_index);
-    f.write_dataset("/Piece/CollisionlessIndex", p.dm_index);
-    write_particles(f, kGasGroup, p.gas);
-    write_particles(f, kDarkMatterGroup, p.dm);
+    f.write_attribute("/Piece", "GasParticles", static_cast<std::int64_t>(n_gas));
+    f.write_attribute("/Piece", "CollisionlessParticles", static_cast<std::int64_t>(n_dm));
+    f.write_dataset("/Piece/GasIndex", gas_index);
+    f.write_dataset("/Piece/CollisionlessIndex", dm_index);
+    Checksum c;  // as piece_checksum adds them
+    c.add(gas_index);
+    c.add(dm_index);
+    write_particles(f, kGasGroup, gas, c, gas_rows);
+    write_particles(f, kDarkMatterGroup, dm, c, dm_rows);
+    f.write_attribute("/Piece", "Checksum", c.hex());
   });
+}
+}  // namespace
+
+void write_restart_piece(const std::string& piece_path, const RestartPiece& p) {
+  write_piece(piece_path, p.gas, nullptr, p.dm, nullptr, p.gas_index, p.dm_index);
+}
+
+void write_restart_piece(const std::string& piece_path, const RestartPieceRows& p) {
+  write_piece(piece_path, p.gas, &p.gas_rows, p.dm, &p.dm_rows, p.gas_index, p.dm_index);
 }
 
 void write_restart_master(const std::string& path, const RestartState& s, long long serial, int pieces,
@@ -373,6 +456,24 @@ RestartState read_restart(const std::string& path, const RestartShare& share) {
   if (f.exists("/Restart/Pieces")) return read_restart_set(f, path, std::move(s), n_gas, n_dm, share);
   s.gas_total = n_gas;
   s.dm_total = n_dm;
+  if (share.ranks > 1) {
+    // Every rank reads the whole file for its checksum, keeping only its rows.
+    const hdf5::RowRange gas_rows = share_of_rows(n_gas, share), dm_rows = share_of_rows(n_dm, share);
+    Checksum c;
+    add_scalars_to_checksum(c, s, n_gas, n_dm);
+    const std::uint64_t run = std::max<std::uint64_t>(share.rows_per_read, 1);
+    s.gas = read_particle_rows<GasParticles>(f, path, kGasGroup, n_gas, gas_rows, run, c, "gas");
+    s.dm = read_particle_rows<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, dm_rows, run, c,
+                                                      "collisionless");
+    const std::string stored = f.read_attribute_string("/Restart", "Checksum");
+    if (stored != c.hex())
+      throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
+    s.gas_shared = true;
+    s.read_as_rows = true;
+    s.gas_first = gas_rows.first;
+    s.dm_first = dm_rows.first;
+    return s;
+  }
   s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
   s.dm = read_particles<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, "collisionless");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");

@@ -37,14 +37,18 @@ struct RestartState {
   star_formation::StarFormationTally star_formation;  // since the start
   std::string parameters_yaml;  // the parameters the run was started with
   long long serial = 0;  // of the last piece set written (0: none), for the next set's names
-  // Read as a share of a set (RestartShare): `gas` holds some pieces' particles, gas_places
-  // each one's place in the run, of gas_total in all. Read whole: gas_places is empty and
-  // gas_total is gas.size().
+  // Read as a share (RestartShare): `gas` holds some of the run's particles, gas_places each
+  // one's place in the run (a set's pieces), or, read_as_rows, the places gas_first,
+  // gas_first + 1, ... (rows of a file written whole), of gas_total in all. Read whole:
+  // gas_shared is false, gas_places is empty and gas_total is gas.size().
   bool gas_shared = false;
+  bool read_as_rows = false;
   std::vector<std::uint64_t> gas_places;
+  std::uint64_t gas_first = 0;
   std::uint64_t gas_total = 0;
   // The same for the collisionless particles (`dm`), read as a share with the gas.
   std::vector<std::uint64_t> dm_places;
+  std::uint64_t dm_first = 0;
   std::uint64_t dm_total = 0;
 };
 
@@ -53,6 +57,10 @@ struct RestartState {
 // flags for restarts is stored under its key, with the particle counts, a format version and a
 // checksum over all of it.
 void write_restart(const std::string& path, const RestartState& state);
+// The same from a run's own stores, which are written where they lie, never copied; the
+// particles of `scalars` are not read.
+void write_restart(const std::string& path, const RestartState& scalars, const GasParticles& gas,
+                   const CollisionlessParticles& dm);
 
 // Across MPI ranks a restart is a set: each rank writes a piece with the particles of the
 // cells it owns, each with its index in the run's particle order, then rank 0 writes the file
@@ -67,6 +75,18 @@ struct RestartPiece {
 };
 std::string restart_piece_name(const std::string& path, long long serial, int rank);
 void write_restart_piece(const std::string& piece_path, const RestartPiece& piece);
+// A piece of a run's own stores: their rows gas_rows and dm_rows (as the run holds them,
+// not copied whole; one field at a time is gathered), each row's place in the run in
+// gas_index and dm_index. The file is that of the RestartPiece of those rows.
+struct RestartPieceRows {
+  const GasParticles& gas;
+  const std::vector<std::size_t>& gas_rows;
+  const CollisionlessParticles& dm;
+  const std::vector<std::size_t>& dm_rows;
+  const std::vector<std::uint64_t>& gas_index;
+  const std::vector<std::uint64_t>& dm_index;
+};
+void write_restart_piece(const std::string& piece_path, const RestartPieceRows& piece);
 // `scalars` is the state without particles; the totals are the whole run's particle counts.
 void write_restart_master(const std::string& path, const RestartState& scalars, long long serial, int pieces,
                           std::uint64_t gas_total, std::uint64_t dm_total);
@@ -79,13 +99,15 @@ void remove_stale_restart_pieces(const std::string& path);
 // pieces that do not fill the run's particles exactly once, throws InputError naming the file.
 RestartState read_restart(const std::string& path);
 
-// Across ranks that hold shares of the gas (runs without gravity or collisionless particles):
-// rank r of R reads the pieces p of a set with p % R == r, with their places, each piece's
-// checksum checked. Whether the pieces fill the run's particles exactly once is for the
-// ranks to check together. A file written whole (by one rank) is read whole; a set holding
-// collisionless particles is refused.
+// Across ranks that hold shares of the particles (runs without star formation): rank r of R
+// reads the pieces p of a set with p % R == r, with their places, each piece's checksum
+// checked; whether the pieces fill the run's particles exactly once is for the ranks to check
+// together. Of a file written whole (by one rank) each rank keeps the rows [N r / R,
+// N (r + 1) / R) of the gas and of the collisionless particles, as of initial conditions,
+// reading the rest a run of rows at a time for the checksum only.
 struct RestartShare {
   int rank = 0, ranks = 1;
+  std::uint64_t rows_per_read = 65536;  // of a file written whole, per field and read
 };
 RestartState read_restart(const std::string& path, const RestartShare& share);
 

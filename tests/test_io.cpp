@@ -6,6 +6,7 @@
 #include <hdf5.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -1114,21 +1115,31 @@ TEST(IoExternal, WriteSnapshotForExternalCheck) {
 }
 
 namespace {
-// Restart state `s` split into two pieces (odd and even indices), written as a set beside `path`.
-void write_as_set(const fountain::io::RestartState& s, const std::string& path, long long serial) {
+// Restart state `s` split into two pieces (odd and even indices), written as a set beside `path`;
+// with from_rows, each piece as a run writes it, as rows of the whole stores (in falling order).
+void write_as_set(const fountain::io::RestartState& s, const std::string& path, long long serial,
+                  bool from_rows = false) {
   const std::filesystem::path dir = std::filesystem::path(path).parent_path();
   for (int r = 0; r < 2; ++r) {
     fountain::io::RestartPiece p;
     std::vector<std::size_t> gi, di;
     for (std::size_t i = static_cast<std::size_t>(r); i < s.gas.size(); i += 2) gi.push_back(i);
     for (std::size_t i = static_cast<std::size_t>(r); i < s.dm.size(); i += 2) di.push_back(i);
+    const std::string name = (dir / fountain::io::restart_piece_name(path, serial, r)).string();
+    if (from_rows) {
+      std::reverse(gi.begin(), gi.end());
+      std::reverse(di.begin(), di.end());
+      const std::vector<std::uint64_t> gas_index(gi.begin(), gi.end()), dm_index(di.begin(), di.end());
+      fountain::io::write_restart_piece(name, fountain::io::RestartPieceRows{s.gas, gi, s.dm, di, gas_index, dm_index});
+      continue;
+    }
     p.gas = s.gas;
     p.gas.permute(gi);
     p.dm = s.dm;
     p.dm.permute(di);
     p.gas_index.assign(gi.begin(), gi.end());
     p.dm_index.assign(di.begin(), di.end());
-    fountain::io::write_restart_piece((dir / fountain::io::restart_piece_name(path, serial, r)).string(), p);
+    fountain::io::write_restart_piece(name, p);
   }
   fountain::io::RestartState scalars = s;
   scalars.gas = {};
@@ -1140,18 +1151,23 @@ void write_as_set(const fountain::io::RestartState& s, const std::string& path, 
 TEST_F(IoTest, RestartSetOfPiecesReadsBackAsTheWholeStateBitwise) {
   const auto s = restart_state(17, 29);
   const std::string path = file("restart.hdf5");
-  write_as_set(s, path, 3);
-  const auto r = fountain::io::read_restart(path);
-  EXPECT_EQ(r.serial, 3);
-  EXPECT_EQ(r.steps, s.steps);
-  EXPECT_EQ(r.parameters_yaml, s.parameters_yaml);
-  ASSERT_EQ(r.gas.size(), s.gas.size());
-  EXPECT_TRUE(same_bits(r.gas.id, s.gas.id));
-  EXPECT_TRUE(same_bits(r.gas.x, s.gas.x));
-  EXPECT_TRUE(same_bits(r.gas.u_full, s.gas.u_full));
-  EXPECT_TRUE(same_bits(r.gas.time_bin, s.gas.time_bin));
-  EXPECT_TRUE(same_bits(r.dm.id, s.dm.id));
-  EXPECT_TRUE(same_bits(r.dm.v_full, s.dm.v_full));
+  // Pieces written from copies of their particles, or as a run writes them, from rows of its stores.
+  for (bool from_rows : {false, true}) {
+    write_as_set(s, path, 3, from_rows);
+    const auto r = fountain::io::read_restart(path);
+    EXPECT_EQ(r.serial, 3);
+    EXPECT_EQ(r.steps, s.steps);
+    EXPECT_EQ(r.parameters_yaml, s.parameters_yaml);
+    ASSERT_EQ(r.gas.size(), s.gas.size());
+    EXPECT_TRUE(same_bits(r.gas.id, s.gas.id));
+    EXPECT_TRUE(same_bits(r.gas.x, s.gas.x));
+    EXPECT_TRUE(same_bits(r.gas.u_full, s.gas.u_full));
+    EXPECT_TRUE(same_bits(r.gas.time_bin, s.gas.time_bin));
+    EXPECT_TRUE(same_bits(r.gas.potential, s.gas.potential));
+    EXPECT_TRUE(same_bits(r.dm.id, s.dm.id));
+    EXPECT_TRUE(same_bits(r.dm.v_full, s.dm.v_full));
+    EXPECT_TRUE(same_bits(r.dm.ti_begin, s.dm.ti_begin));
+  }
   // A newer set replaces it, and the older pieces are then stale and removed.
   write_as_set(s, path, 4);
   fountain::io::remove_stale_restart_pieces(path);
@@ -1189,11 +1205,6 @@ TEST_F(IoTest, RestartSetReadInSharesGivesEachParticleOnceWithItsPlace) {
     }
     for (int count : seen) EXPECT_EQ(count, 1);
   }
-  const std::string single = file("single.hdf5");
-  fountain::io::write_restart(single, s);
-  const auto alone = fountain::io::read_restart(single, {1, 2});
-  EXPECT_FALSE(alone.gas_shared);
-  EXPECT_EQ(alone.gas.size(), s.gas.size());
   const std::string with_dm = file("with_dm.hdf5");
   const auto d = restart_state(17, 5);
   write_as_set(d, with_dm, 1);
@@ -1212,6 +1223,65 @@ TEST_F(IoTest, RestartSetReadInSharesGivesEachParticleOnceWithItsPlace) {
     }
   }
   for (int count : seen) EXPECT_EQ(count, 1);
+}
+
+TEST_F(IoTest, RestartFileWrittenWholeIsReadInSharesOfItsRows) {
+  const auto s = restart_state(17, 11);
+  const std::string path = file("single.hdf5");
+  fountain::io::write_restart(path, s);
+  for (int ranks : {2, 3, 5}) {
+    for (std::uint64_t run : {1u, 4u, 65536u}) {  // rows per read: every field crosses runs, or none
+      std::size_t gas_next = 0, dm_next = 0;
+      for (int r = 0; r < ranks; ++r) {
+        const auto share = fountain::io::read_restart(path, {r, ranks, run});
+        const std::string where = "rank " + std::to_string(r) + " of " + std::to_string(ranks);
+        EXPECT_TRUE(share.gas_shared && share.read_as_rows) << where;
+        EXPECT_TRUE(share.gas_places.empty() && share.dm_places.empty()) << where;
+        EXPECT_EQ(share.gas_total, s.gas.size());
+        EXPECT_EQ(share.dm_total, s.dm.size());
+        EXPECT_EQ(share.steps, s.steps);
+        EXPECT_EQ(share.parameters_yaml, s.parameters_yaml);
+        // Rows [N r / R, N (r + 1) / R), as the initial conditions are shared.
+        EXPECT_EQ(share.gas_first, s.gas.size() * static_cast<std::size_t>(r) / static_cast<std::size_t>(ranks));
+        EXPECT_EQ(share.gas_first, gas_next) << where;
+        EXPECT_EQ(share.dm_first, dm_next) << where;
+        for (std::size_t i = 0; i < share.gas.size(); ++i) {
+          const std::size_t p = share.gas_first + i;
+          EXPECT_EQ(share.gas.id[i], s.gas.id[p]);
+          EXPECT_TRUE(same_bits(std::vector<Vec3>{share.gas.x[i]}, std::vector<Vec3>{s.gas.x[p]}));
+          EXPECT_TRUE(same_bits(std::vector<double>{share.gas.potential[i]}, std::vector<double>{s.gas.potential[p]}));
+          EXPECT_EQ(share.gas.ti_begin[i], s.gas.ti_begin[p]);
+          EXPECT_EQ(share.gas.wake_bin[i], s.gas.wake_bin[p]);
+        }
+        for (std::size_t i = 0; i < share.dm.size(); ++i) {
+          const std::size_t p = share.dm_first + i;
+          EXPECT_EQ(share.dm.id[i], s.dm.id[p]);
+          EXPECT_TRUE(same_bits(std::vector<Vec3>{share.dm.v_full[i]}, std::vector<Vec3>{s.dm.v_full[p]}));
+          EXPECT_EQ(share.dm.time_bin[i], s.dm.time_bin[p]);
+        }
+        gas_next = share.gas_first + share.gas.size();
+        dm_next = share.dm_first + share.dm.size();
+      }
+      EXPECT_EQ(gas_next, s.gas.size());
+      EXPECT_EQ(dm_next, s.dm.size());
+    }
+  }
+  // Every rank checks the whole file: a change in a row another rank keeps is found.
+  {
+    hid_t f = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    ASSERT_GE(f, 0);
+    hid_t ds = H5Dopen2(f, "/DarkMatter/potential", H5P_DEFAULT);
+    ASSERT_GE(ds, 0);
+    std::vector<double> p = s.dm.potential;
+    p[10] += 1e-12;  // the last rank's row
+    EXPECT_GE(H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), 0);
+    H5Dclose(ds);
+    EXPECT_GE(H5Fclose(f), 0);
+  }
+  for (std::uint64_t run : {3u, 65536u}) {
+    const std::string msg = error_of([&] { fountain::io::read_restart(path, {0, 3, run}); });
+    EXPECT_TRUE(contains(msg, path + ": restart file is corrupted")) << msg;
+  }
 }
 
 TEST_F(IoTest, RestartSetWithAMissingOrCorruptedPieceIsRefusedByName) {

@@ -31,10 +31,6 @@ RestartPolicy::~RestartPolicy() { stop(); }
 void RestartPolicy::save() {
   io::RestartState out;
   const std::string path = restart_path(params_);
-  if (engine_.ranks() == 1) {
-    out.gas = engine_.gas();
-    out.dm = engine_.dark_matter();
-  }
   out.ti_current = engine_.ti_current();
   out.ti_step_begin = engine_.ti_step_begin();
   out.mesh_step_bin = engine_.mesh_step().bin;
@@ -47,24 +43,21 @@ void RestartPolicy::save() {
   out.star_formation = engine_.star_formation_total();
   out.parameters_yaml = config_.parameters_yaml;
   if (engine_.ranks() == 1) {
-    io::write_restart(path, out);
+    io::write_restart(path, out, engine_.gas(), engine_.dark_matter());
     io::remove_stale_restart_pieces(path);  // of a set an earlier run on several ranks wrote
   } else {
     // Each rank writes the particles of its own cells (current on it in halo mode too),
     // then rank 0 the master naming the pieces; the previous set stays whole until then.
     ++serial_;
     const auto [gas_owned, dm_owned] = engine_.owned_particles();
-    io::RestartPiece piece;
-    piece.gas = engine_.gas();
-    piece.gas.permute(gas_owned);
-    piece.dm = engine_.dark_matter();
-    piece.dm.permute(dm_owned);
     const std::vector<std::size_t> places = engine_.run_places(gas_owned);
-    piece.gas_index.assign(places.begin(), places.end());
+    const std::vector<std::uint64_t> gas_index(places.begin(), places.end());
     const std::vector<std::size_t> dm_places = engine_.run_collisionless_places(dm_owned);
-    piece.dm_index.assign(dm_places.begin(), dm_places.end());
+    const std::vector<std::uint64_t> dm_index(dm_places.begin(), dm_places.end());
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
-    io::write_restart_piece((dir / io::restart_piece_name(path, serial_, engine_.rank())).string(), piece);
+    io::write_restart_piece((dir / io::restart_piece_name(path, serial_, engine_.rank())).string(),
+                            io::RestartPieceRows{engine_.gas(), gas_owned, engine_.dark_matter(), dm_owned, gas_index,
+                                                 dm_index});
     (void)engine_.any_rank(false);  // every piece is in place before the master names it
     if (engine_.rank() == 0) {
       io::write_restart_master(path, out, serial_, engine_.ranks(), engine_.gas_count(),

@@ -283,16 +283,20 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
   if (config.space.periodic) check_fits_periodic_box(ic, ic_path, ranks.get());
   check_distinct_positions(ic, config.space.periodic, ic_path, ranks.get());
   if (options.restart) {
+    // The restart's particles replace those of the initial conditions, which are checked by
+    // now: dropped first, so that the two never stand in memory together.
+    ic.gas = GasParticles{};
+    ic.dm = CollisionlessParticles{};
     io::RestartState& state = start.restart;
     state = ranks ? io::read_restart(restart_path(params), io::RestartShare{ranks->rank(), ranks->size()})
                   : io::read_restart(restart_path(params));
     check_same_parameters(state, params, restart_path(params));
-    // A set is read in shares of its pieces, a file written by one rank whole.
+    // A set is read in shares of its pieces, a file written by one rank in shares of its rows.
     start.share.reset();
     if (state.gas_shared) {
-      check_pieces_fill_the_run(state, restart_path(params), *ranks);
-      start.share = Engine::GasShare{0, state.gas_total, std::move(state.gas_places), true, state.dm_total,
-                                     std::move(state.dm_places), 0};
+      if (!state.read_as_rows) check_pieces_fill_the_run(state, restart_path(params), *ranks);
+      start.share = Engine::GasShare{state.gas_first, state.gas_total, std::move(state.gas_places), true,
+                                     state.dm_total, std::move(state.dm_places), state.dm_first};
     }
     // (Runs with stars, which star formation spawns, keep every particle on every rank.)
     const std::size_t state_dm = (state.gas_shared ? state.dm_total : state.dm.size()) - state.dm.count(Species::Star);
