@@ -1,5 +1,11 @@
 // The paper's time-series diagnostics (docs/physics.md section 7): gas phases, energies, momenta, unbound gas.
 #pragma once
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/ExactSum.hpp"
 #include "core/IdealGas.hpp"
 #include "core/Units.hpp"
 #include "core/Vec3.hpp"
@@ -47,28 +53,45 @@ struct Diagnostics {
   double total_energy() const { return thermal + kinetic + potential; }
 };
 
-// The same sums taken over the particles as they come, a run at a time (across MPI ranks rank 0
-// receives them in pieces): every gas particle first, then every collisionless one, in the
-// run's order, give measure()'s result to the bit.
+// The same sums taken over the particles a run at a time: each call sums its run in doubles,
+// in the run's order, and adds those sums exactly to the totals (core/ExactSum.hpp), which
+// combine exactly with other parts' (add(), another rank's by add_packed()). So the result
+// depends on the runs alone (the leaves, which are the same on any number of ranks or
+// threads), not on their order or on who summed them; runs of one particle give the exact
+// total.
 class DiagnosticsSum {
  public:
   DiagnosticsSum(TemperatureOf temperature, const FigurePhases& phases, double a = 1.0);
   void add_gas(const GasParticles& gas, std::size_t first, std::size_t count);
   void add_collisionless(const CollisionlessParticles& p, std::size_t first, std::size_t count);
+  // Another rank's sums (from pack()) or another part's.
+  void add(const DiagnosticsSum& other);
+  std::vector<char> pack() const;
+  void add_packed(std::span<const char> packed);
   Diagnostics result() const;
 
  private:
+  enum Sum {
+    kMassGas, kMassDarkMatter, kMassHot, kMassWarm, kMassCold, kMassUnbound, kThermal, kKinetic, kPotential,
+    kMassStars, kMassStarsHidden, kMassPromotedDiffuse, kReservoir, kMomentum, kAngularMomentum = kMomentum + 3,
+    kSums = kAngularMomentum + 3
+  };
+  static void add_vector(std::array<double, kSums>& part, Sum s, const Vec3& v) {
+    for (int k = 0; k < 3; ++k) part[static_cast<std::size_t>(s + k)] += v[k];
+  }
+  void add_part(const std::array<double, kSums>& part);
+
   TemperatureOf temperature_;
   FigurePhases phases_;
   double a_;
-  Diagnostics d_;
+  std::array<ExactSum, kSums> sums_;
   double h_min_;
   int bin_min_;
-  std::size_t gas_ = 0, collisionless_ = 0;
+  std::uint64_t gas_ = 0, collisionless_ = 0;
 };
 
 // Sums over the current particle state (gas at its predicted values; potentials from the
-// last force computation, zero without gravity). A comoving run's state (scale factor a < 1
+// last force computation, zero without gravity), as DiagnosticsSum takes them. A comoving run's state (scale factor a < 1
 // or not, gamma = 5/3) is measured physically: rho'/a^3, u'/a^2, h = a h', peculiar
 // velocities v'/a and potentials Phi'/a; plain runs pass a = 1.
 Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "app/Simulation.hpp"
+#include "core/Collectives.hpp"
 #include "core/Error.hpp"
 
 namespace fountain {
@@ -172,12 +173,19 @@ StatisticsSeries::StatisticsSeries(const RunConfig& config, Engine& engine, Temp
 }
 
 void StatisticsSeries::write() {
-  // Every rank takes part (the particles' owners send them to rank 0); rank 0 writes.
+  // Every rank sums its own particles and the sums go to rank 0, which writes: the sums are
+  // exact until rounded, so the line is one rank's whatever the ranks.
   analysis::DiagnosticsSum sum(temperature_, phases_, engine_.scale_factor());
-  engine_.stream_state([&](const GasParticles& p, std::size_t first, std::size_t n) { sum.add_gas(p, first, n); },
-                       [&](const CollisionlessParticles& p, std::size_t first, std::size_t n) {
-                         sum.add_collisionless(p, first, n);
-                       });
+  engine_.visit_own_state([&](const GasParticles& p, std::size_t first, std::size_t n) { sum.add_gas(p, first, n); },
+                          [&](const CollisionlessParticles& p, std::size_t first, std::size_t n) {
+                            sum.add_collisionless(p, first, n);
+                          });
+  if (Collectives* ranks = engine_.collectives()) {
+    const std::vector<char> mine = sum.pack();
+    const std::vector<std::vector<char>> all = ranks->allgather(mine);
+    if (engine_.rank() == 0)
+      for (std::size_t r = 1; r < all.size(); ++r) sum.add_packed(all[r]);
+  }
   if (!file_) return;
   // Physical units: a comoving run's h-scaled units divided by h (h cancels in the rate).
   const Units units = config_.physical_units();

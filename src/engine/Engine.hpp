@@ -216,6 +216,12 @@ class Engine {
   template <class Store>
   using StatePiece = std::function<void(const Store&, std::size_t first, std::size_t count)>;
   void stream_state(const StatePiece<GasParticles>& gas, const StatePiece<CollisionlessParticles>& collisionless);
+  // This rank's own particles, a leaf at a time: gas(store, first, count) and
+  // collisionless(...) for each leaf it owns (the leaves and their particles' order are the
+  // same on any number of ranks); before the first recut, a particle at a time, of the share a
+  // rank in halo mode read, or else of rank 0's every particle. What a sum over the run each
+  // rank takes its part of reads, with no particle sent.
+  void visit_own_state(const StatePiece<GasParticles>& gas, const StatePiece<CollisionlessParticles>& collisionless) const;
   // The gas and collisionless particles (indices) of the leaves this rank owns, in the
   // run's order: what it writes of a restart set. Every particle when alone.
   std::pair<std::vector<std::size_t>, std::vector<std::size_t>> owned_particles() const;

@@ -47,6 +47,25 @@ std::pair<std::vector<std::size_t>, std::vector<std::size_t>> Engine::owned_part
   return out;
 }
 
+void Engine::visit_own_state(const StatePiece<GasParticles>& gas,
+                             const StatePiece<CollisionlessParticles>& collisionless) const {
+  if (space_.leaves().empty()) {
+    // Before the first recut a rank in halo mode holds the share it read, and owns it;
+    // otherwise rank 0 holds every particle and speaks for all. No leaves split the state
+    // the same way for every rank count yet: a particle at a time.
+    if (!layout_.halo_mode() && layout_.rank() != 0) return;
+    for (std::size_t i = 0; i < gas_.size(); ++i) gas(gas_, i, 1);
+    for (std::size_t i = 0; i < dm_.size(); ++i) collisionless(dm_, i, 1);
+    return;
+  }
+  for (int c : space_.leaves()) {
+    if (!mine(c)) continue;
+    const Cell& cell = space_.cell(c);
+    if (cell.count > 0) gas(gas_, cell.first, cell.count);
+    if (cell.dm_count > 0) collisionless(dm_, cell.dm_first, cell.dm_count);
+  }
+}
+
 std::pair<std::size_t, std::size_t> Engine::list_share(int rank) const {
   const std::size_t n = space_.leaves().size(), ranks = static_cast<std::size_t>(ranks_->size());
   const auto r = static_cast<std::size_t>(rank);

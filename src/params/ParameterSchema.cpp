@@ -101,7 +101,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       integer("output.statistics_every", "0", 0, 1e15,
               "Append a line of global diagnostics (gas phases, energies, momenta, unbound gas) to <output.directory>/statistics.txt every this many steps; 0 never. Comoving runs: physical values, the time column a."),
       integer("output.gather_particles", "8192", 1, 1e15,
-              "Across MPI ranks: snapshots and statistics lines are written by rank 0 from the particles each rank sends it, at most this many per message, so that rank 0 never holds more than that many beside its own."),
+              "Across MPI ranks: snapshots are written by rank 0 from the particles each rank sends it, at most this many per message, so that rank 0 never holds more than that many beside its own."),
       boolean("output.fof_groups", "false",
               "Comoving runs: find each snapshot's friends-of-friends halos as it is written (fountain fof's defaults), into <output.directory>/fof_NNNN.hdf5."),
       boolean("output.hop_groups", "false",
