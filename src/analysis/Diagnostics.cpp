@@ -113,21 +113,22 @@ void DiagnosticsSum::add_packed(std::span<const char> packed) {
 }
 
 Diagnostics DiagnosticsSum::result() const {
+  static constexpr std::pair<int, double Diagnostics::*> kScalars[] = {
+      {kMassGas, &Diagnostics::mass_gas},
+      {kMassDarkMatter, &Diagnostics::mass_dark_matter},
+      {kMassHot, &Diagnostics::mass_hot},
+      {kMassWarm, &Diagnostics::mass_warm},
+      {kMassCold, &Diagnostics::mass_cold},
+      {kMassUnbound, &Diagnostics::mass_unbound},
+      {kThermal, &Diagnostics::thermal},
+      {kKinetic, &Diagnostics::kinetic},
+      {kPotential, &Diagnostics::potential},
+      {kMassStars, &Diagnostics::mass_stars},
+      {kMassStarsHidden, &Diagnostics::mass_stars_hidden},
+      {kMassPromotedDiffuse, &Diagnostics::mass_promoted_diffuse},
+      {kReservoir, &Diagnostics::reservoir}};
   Diagnostics d;
-  auto value = [&](Sum s) { return sums_[s].value(); };
-  d.mass_gas = value(kMassGas);
-  d.mass_dark_matter = value(kMassDarkMatter);
-  d.mass_hot = value(kMassHot);
-  d.mass_warm = value(kMassWarm);
-  d.mass_cold = value(kMassCold);
-  d.mass_unbound = value(kMassUnbound);
-  d.thermal = value(kThermal);
-  d.kinetic = value(kKinetic);
-  d.potential = value(kPotential);
-  d.mass_stars = value(kMassStars);
-  d.mass_stars_hidden = value(kMassStarsHidden);
-  d.mass_promoted_diffuse = value(kMassPromotedDiffuse);
-  d.reservoir = value(kReservoir);
+  for (const auto& [sum, field] : kScalars) d.*field = sums_[static_cast<std::size_t>(sum)].value();
   for (int k = 0; k < 3; ++k) {
     d.momentum[k] = sums_[static_cast<std::size_t>(kMomentum + k)].value();
     d.angular_momentum[k] = sums_[static_cast<std::size_t>(kAngularMomentum + k)].value();
