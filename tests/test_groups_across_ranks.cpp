@@ -264,6 +264,7 @@ TEST(FofAcrossRanks, SumInAnyOrderIsTheSameForEverySplit) {
   long double exact = 0.0L;
   for (double v : values) exact += v;
   EXPECT_NEAR(alone / static_cast<double>(exact), 1.0, 1e-14);
+  EXPECT_EQ(sum_in_any_order({1e100, 1.0, -1e100}, nullptr), 1.0);  // exact, not rounded per value
   for (int ranks = 2; ranks <= 4; ++ranks) {
     std::vector<std::vector<double>> share(static_cast<std::size_t>(ranks));
     std::shuffle(values.begin(), values.end(), rng);

@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "core/Error.hpp"
+#include "core/ExactSum.hpp"
 #include "core/PeriodicWrap.hpp"
 #include "gravity/GravityTree.hpp"
 #include "groups/FriendsOfFriends.hpp"
@@ -124,21 +125,14 @@ struct ShellAnswer {
 }  // namespace
 
 double sum_in_any_order(const std::vector<double>& mine, Collectives* ranks) {
-  double largest = 0.0;
-  for (double v : mine) {
-    if (!(v >= 0.0) || !std::isfinite(v)) throw std::invalid_argument("sum_in_any_order: a negative or non-finite value");
-    largest = std::max(largest, v);
-  }
-  for (double v : gather_all(std::vector<double>{largest}, ranks)) largest = std::max(largest, v);
-  if (largest == 0.0) return 0.0;
-  const double scale = std::ldexp(1.0, 62) / largest;
-  unsigned __int128 sum = 0;
-  for (double v : mine) sum += static_cast<std::uint64_t>(std::nearbyint(v * scale));
-  const std::vector<std::uint64_t> halves{static_cast<std::uint64_t>(sum >> 64), static_cast<std::uint64_t>(sum)};
-  const std::vector<std::uint64_t> all = gather_all(halves, ranks);
-  unsigned __int128 total = 0;
-  for (std::size_t k = 0; k < all.size(); k += 2) total += (static_cast<unsigned __int128>(all[k]) << 64) | all[k + 1];
-  return static_cast<double>(total) / scale;
+  ExactSum sum;
+  for (double v : mine) sum.add(v);
+  const auto words = sum.words();
+  const std::vector<std::int64_t> all = gather_all(std::vector<std::int64_t>(words.begin(), words.end()), ranks);
+  ExactSum total;
+  for (std::size_t k = 0; k + ExactSum::kWords <= all.size(); k += ExactSum::kWords)
+    total.add(ExactSum::from_words(all.data() + k));
+  return total.value();
 }
 
 GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofParameters& p, Collectives* ranks) {

@@ -29,9 +29,8 @@ struct GroupCatalogue {
 // the particles. Every rank calls it.
 GroupCatalogue find_fof_groups_across_ranks(const ParticleSet& mine, const FofParameters& p, Collectives* ranks);
 
-// The sum of non-negative values over every rank, the same whatever their order or their
-// split between ranks: each value is rounded to a multiple of 2^-62 of the largest of all and
-// the multiples are summed as integers (a relative rounding of at most 2^-62 per value).
+// The sum of values over every rank, exact until rounded once (core/ExactSum.hpp): the same
+// whatever their order or their split between ranks.
 double sum_in_any_order(const std::vector<double>& mine, Collectives* ranks);
 
 }  // namespace fountain::groups
