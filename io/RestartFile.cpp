@@ -72,14 +72,9 @@ star_formation::StarFormationTally tally_from(const std::vector<double>& v) {
 
 // ---- A whole particle type ---------------------------------------------------------------
 
-template <class Particles>
-void add_to_checksum(Checksum& c, const Particles& p) {
-  for_each_restart_field(p, [&](const char*, const auto& field) { c.add(field); });
-}
-
 // Writes the restart fields of `p` (its rows `rows`, in that order, or all of them) and adds
-// them to the checksum, each field as add_to_checksum adds it: a field of the rows is gathered
-// alone, so the store is never copied whole.
+// each to the checksum as read_particle_rows does: a field of the rows is gathered alone, so
+// the store is never copied whole.
 template <class Particles>
 void write_particles(hdf5::File& f, const std::string& group, const Particles& p, Checksum& c,
                      const std::vector<std::size_t>* rows = nullptr) {
@@ -97,23 +92,6 @@ void write_particles(hdf5::File& f, const std::string& group, const Particles& p
   });
 }
 
-// Reads every field of `group`; each must hold `count` entries (the count in /Restart).
-template <class Particles>
-Particles read_particles(const hdf5::File& f, const std::string& path, const std::string& group,
-                         std::uint64_t count, const char* noun) {
-  Particles p;
-  for_each_restart_field(p, [&](const char* name, auto& field) {
-    const std::string dataset = group + "/" + name;
-    if (!f.exists(dataset)) throw InputError(fmt::format("{}: {} not found (restart file incomplete)", path, dataset));
-    read_field(f, dataset, field);
-    if (field.size() != count)
-      throw InputError(fmt::format("{}: {} has {} entries, but the file holds {} {} particles", path, dataset,
-                                   field.size(), count, noun));
-  });
-  p.resize(count);  // the fields restart files do not hold
-  return p;
-}
-
 // n_gas and n_dm: the whole run's particle counts.
 std::string scalars_checksum_text(const RestartState& s, std::uint64_t n_gas, std::uint64_t n_dm) {
   std::string text = fmt::format("{} {} {} {} {} {} {} {:a} {} {} {}", s.ti_current, s.ti_step_begin, s.steps,
@@ -129,21 +107,15 @@ void add_scalars_to_checksum(Checksum& c, const RestartState& s, std::uint64_t n
   c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
 }
 
-std::string checksum(const RestartState& s) {
-  Checksum c;
-  add_scalars_to_checksum(c, s, s.gas.size(), s.dm.size());
-  add_to_checksum(c, s.gas);
-  add_to_checksum(c, s.dm);
-  return c.hex();
-}
-
-// Reads every field of `group` (each must hold `count` rows) a run of rows at a time, adds
-// every row to the checksum as checksum() adds the whole field, and keeps the rows of `keep`:
-// the memory this takes is the share plus one run of rows of one field.
+// Reads every field of `group` (each must hold `count` rows, the count the file states) a run
+// of `rows_per_read` rows at a time (0: all at once), adds each field's rows to the checksum in
+// the order write_particles adds them, and keeps the rows of `keep`: the memory this takes is
+// what it keeps plus one run of rows of one field.
 template <class Particles>
 Particles read_particle_rows(const hdf5::File& f, const std::string& path, const std::string& group,
                              std::uint64_t count, hdf5::RowRange keep, std::uint64_t rows_per_read, Checksum& c,
                              const char* noun) {
+  const std::uint64_t step = rows_per_read == 0 ? std::max<std::uint64_t>(count, 1) : rows_per_read;
   Particles p;
   for_each_restart_field(p, [&](const char* name, auto& field) {
     const std::string dataset = group + "/" + name;
@@ -152,16 +124,20 @@ Particles read_particle_rows(const hdf5::File& f, const std::string& path, const
     if (rows != count)
       throw InputError(fmt::format("{}: {} has {} entries, but the file holds {} {} particles", path, dataset, rows,
                                    count, noun));
-    field.reserve(keep.count);
+    if (keep.count < count) field.reserve(keep.count);
     std::remove_reference_t<decltype(field)> run;
-    for (std::uint64_t first = 0; first < count; first += rows_per_read) {
-      const hdf5::RowRange range{first, std::min(rows_per_read, count - first)};
+    for (std::uint64_t first = 0; first < count; first += step) {
+      const hdf5::RowRange range{first, std::min(step, count - first)};
       read_field(f, dataset, run, &range);
       c.add(run);
       const std::uint64_t from = std::max(first, keep.first), to = std::min(first + range.count, keep.first + keep.count);
-      if (from < to)
+      if (from == first && to == first + range.count && field.empty()) {
+        field = std::move(run);  // the whole run is kept (a whole read): no copy
+        run = {};
+      } else if (from < to) {
         field.insert(field.end(), run.begin() + static_cast<std::ptrdiff_t>(from - first),
                      run.begin() + static_cast<std::ptrdiff_t>(to - first));
+      }
     }
   });
   p.resize(keep.count);  // the fields restart files do not hold
@@ -206,15 +182,6 @@ std::string master_checksum(const RestartState& s, std::uint64_t n_gas, std::uin
                               fmt::format(" {} {} {} {}", n_gas, n_dm, serial, names);
   c.add(scalars.data(), scalars.size());
   c.add(s.parameters_yaml.data(), s.parameters_yaml.size());
-  return c.hex();
-}
-
-std::string piece_checksum(const RestartPiece& p) {
-  Checksum c;
-  c.add(p.gas_index);
-  c.add(p.dm_index);
-  add_to_checksum(c, p.gas);
-  add_to_checksum(c, p.dm);
   return c.hex();
 }
 
@@ -292,7 +259,7 @@ void write_piece(const std::string& piece_path, const GasParticles& gas, const s
     f.write_attribute("/Piece", "CollisionlessParticles", static_cast<std::int64_t>(n_dm));
     f.write_dataset("/Piece/GasIndex", gas_index);
     f.write_dataset("/Piece/CollisionlessIndex", dm_index);
-    Checksum c;  // as piece_checksum adds them
+    Checksum c;  // in the order read_restart_set checks them
     c.add(gas_index);
     c.add(dm_index);
     write_particles(f, kGasGroup, gas, c, gas_rows);
@@ -388,14 +355,17 @@ RestartState read_restart_set(const hdf5::File& f, const std::string& path, Rest
     RestartPiece p;
     const std::uint64_t pg = pf.read_attribute_uint64("/Piece", "GasParticles").at(0);
     const std::uint64_t pd = pf.read_attribute_uint64("/Piece", "CollisionlessParticles").at(0);
-    p.gas = read_particles<GasParticles>(pf, piece, kGasGroup, pg, "gas");
-    p.dm = read_particles<CollisionlessParticles>(pf, piece, kDarkMatterGroup, pd, "collisionless");
     p.gas_index = pf.read_uint64("/Piece/GasIndex");
     p.dm_index = pf.read_uint64("/Piece/CollisionlessIndex");
     if (p.gas_index.size() != pg || p.dm_index.size() != pd)
       throw InputError(fmt::format("{}: its particle indices disagree with its particle counts", piece));
+    Checksum c;  // in the order write_piece adds them
+    c.add(p.gas_index);
+    c.add(p.dm_index);
+    p.gas = read_particle_rows<GasParticles>(pf, piece, kGasGroup, pg, {0, pg}, 0, c, "gas");
+    p.dm = read_particle_rows<CollisionlessParticles>(pf, piece, kDarkMatterGroup, pd, {0, pd}, 0, c, "collisionless");
     const std::string stored = pf.read_attribute_string("/Piece", "Checksum");
-    if (stored != piece_checksum(p))
+    if (stored != c.hex())
       throw InputError(fmt::format("{}: restart piece is corrupted (checksum {} does not match its contents)", piece, stored));
     if (shared) {
       for (std::uint64_t i : p.gas_index)
@@ -456,29 +426,22 @@ RestartState read_restart(const std::string& path, const RestartShare& share) {
   if (f.exists("/Restart/Pieces")) return read_restart_set(f, path, std::move(s), n_gas, n_dm, share);
   s.gas_total = n_gas;
   s.dm_total = n_dm;
-  if (share.ranks > 1) {
-    // Every rank reads the whole file for its checksum, keeping only its rows.
-    const hdf5::RowRange gas_rows = share_of_rows(n_gas, share), dm_rows = share_of_rows(n_dm, share);
-    Checksum c;
-    add_scalars_to_checksum(c, s, n_gas, n_dm);
-    const std::uint64_t run = std::max<std::uint64_t>(share.rows_per_read, 1);
-    s.gas = read_particle_rows<GasParticles>(f, path, kGasGroup, n_gas, gas_rows, run, c, "gas");
-    s.dm = read_particle_rows<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, dm_rows, run, c,
-                                                      "collisionless");
-    const std::string stored = f.read_attribute_string("/Restart", "Checksum");
-    if (stored != c.hex())
-      throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
-    s.gas_shared = true;
-    s.read_as_rows = true;
-    s.gas_first = gas_rows.first;
-    s.dm_first = dm_rows.first;
-    return s;
-  }
-  s.gas = read_particles<GasParticles>(f, path, kGasGroup, n_gas, "gas");
-  s.dm = read_particles<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, "collisionless");
+  // Across ranks each keeps its rows, and reads the rest a run of rows at a time for the
+  // checksum only.
+  const bool shared = share.ranks > 1;
+  const hdf5::RowRange gas_rows = shared ? share_of_rows(n_gas, share) : hdf5::RowRange{0, n_gas};
+  const hdf5::RowRange dm_rows = shared ? share_of_rows(n_dm, share) : hdf5::RowRange{0, n_dm};
+  const std::uint64_t run = shared ? std::max<std::uint64_t>(share.rows_per_read, 1) : 0;
+  Checksum c;
+  add_scalars_to_checksum(c, s, n_gas, n_dm);
+  s.gas = read_particle_rows<GasParticles>(f, path, kGasGroup, n_gas, gas_rows, run, c, "gas");
+  s.dm = read_particle_rows<CollisionlessParticles>(f, path, kDarkMatterGroup, n_dm, dm_rows, run, c, "collisionless");
   const std::string stored = f.read_attribute_string("/Restart", "Checksum");
-  if (stored != checksum(s))
+  if (stored != c.hex())
     throw InputError(fmt::format("{}: restart file is corrupted (checksum {} does not match its contents)", path, stored));
+  s.gas_shared = s.read_as_rows = shared;
+  s.gas_first = gas_rows.first;
+  s.dm_first = dm_rows.first;
   return s;
 }
 

@@ -138,12 +138,4 @@ Diagnostics DiagnosticsSum::result() const {
   return d;
 }
 
-Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
-                    const FigurePhases& phases, double a) {
-  DiagnosticsSum sum(temperature, phases, a);
-  sum.add_gas(gas, 0, gas.size());
-  sum.add_collisionless(dm, 0, dm.size());
-  return sum.result();
-}
-
 }  // namespace fountain::analysis

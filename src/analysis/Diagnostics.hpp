@@ -58,7 +58,10 @@ struct Diagnostics {
 // combine exactly with other parts' (add(), another rank's by add_packed()). So the result
 // depends on the runs alone (the leaves, which are the same on any number of ranks or
 // threads), not on their order or on who summed them; runs of one particle give the exact
-// total.
+// total. The state is summed as it stands (gas at its predicted values; potentials from the
+// last force computation, zero without gravity); a comoving run's (scale factor a < 1 or not,
+// gamma = 5/3) is measured physically: rho'/a^3, u'/a^2, h = a h', peculiar velocities v'/a
+// and potentials Phi'/a; plain runs pass a = 1.
 class DiagnosticsSum {
  public:
   DiagnosticsSum(TemperatureOf temperature, const FigurePhases& phases, double a = 1.0);
@@ -89,12 +92,5 @@ class DiagnosticsSum {
   int bin_min_;
   std::uint64_t gas_ = 0, collisionless_ = 0;
 };
-
-// Sums over the current particle state (gas at its predicted values; potentials from the
-// last force computation, zero without gravity), as DiagnosticsSum takes them. A comoving run's state (scale factor a < 1
-// or not, gamma = 5/3) is measured physically: rho'/a^3, u'/a^2, h = a h', peculiar
-// velocities v'/a and potentials Phi'/a; plain runs pass a = 1.
-Diagnostics measure(const GasParticles& gas, const CollisionlessParticles& dm, const TemperatureOf& temperature,
-                    const FigurePhases& phases, double a = 1.0);
 
 }  // namespace fountain::analysis
