@@ -293,6 +293,7 @@ void Engine::setup_periodic_gravity() {
   // Across ranks each holds a slab of the mesh's planes (collective: every rank is here).
   ctx_->long_range = std::make_unique<gravity::LongRangeForce>(cells, box.x, r_s, config_.gravity.G,
                                                                ranks_ ? gravity::MeshSlabs::world(cells) : nullptr);
+  ctx_->long_range->mesh.set_round_bytes(config_.message_bytes);
 }
 
 void Engine::register_tasks() {

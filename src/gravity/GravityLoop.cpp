@@ -203,18 +203,24 @@ void compute_long_range(StepContext& ctx) {
   }
   // The results go into the particles' fields at once: nothing of this is kept between
   // mesh steps.
+  const std::size_t n_gas = g.size();
+  auto store = [&](std::size_t k, const Vec3& a, double phi) {
+    if (k < n_gas) {
+      gas.a_mesh[g[k]] = a;
+      gas.potential_mesh[g[k]] = phi;
+    } else {
+      dm.a_mesh[d[k - n_gas]] = a;
+      dm.potential_mesh[d[k - n_gas]] = phi;
+    }
+  };
+  if (ctx.halo_mode) {
+    lr.mesh.compute_owned(x, m, store, ctx.in_task_for_each);
+    return;
+  }
   std::vector<Vec3> acceleration(n);
   std::vector<double> potential(n);
-  if (ctx.halo_mode) lr.mesh.compute_owned(x, m, acceleration, potential, ctx.in_task_for_each);
-  else lr.mesh.compute(x, m, acceleration, potential, ctx.in_task_for_each);
-  for (std::size_t k = 0; k < g.size(); ++k) {
-    gas.a_mesh[g[k]] = acceleration[k];
-    gas.potential_mesh[g[k]] = potential[k];
-  }
-  for (std::size_t k = 0; k < d.size(); ++k) {
-    dm.a_mesh[d[k]] = acceleration[g.size() + k];
-    dm.potential_mesh[d[k]] = potential[g.size() + k];
-  }
+  lr.mesh.compute(x, m, acceleration, potential, ctx.in_task_for_each);
+  for (std::size_t k = 0; k < n; ++k) store(k, acceleration[k], potential[k]);
 }
 
 void plan_tree_update(StepContext& ctx) {

@@ -146,6 +146,15 @@ std::int64_t MeshSlabs::sum(std::int64_t local) const {
   return total;
 }
 
+void MeshSlabs::sum(std::span<std::int64_t> values) const {
+  constexpr std::size_t kChunk = 1 << 20;
+  for (std::size_t at = 0; at < values.size(); at += kChunk) {
+    const int count = static_cast<int>(std::min(kChunk, values.size() - at));
+    check(MPI_Allreduce(MPI_IN_PLACE, values.data() + at, count, MPI_INT64_T, MPI_SUM, impl_->comm),
+          "MPI_Allreduce (mesh counts)");
+  }
+}
+
 double MeshSlabs::min(double local) const {
   double out = 0.0;
   check(MPI_Allreduce(&local, &out, 1, MPI_DOUBLE, MPI_MIN, impl_->comm), "MPI_Allreduce (mesh minimum)");
@@ -200,6 +209,7 @@ void MeshSlabs::transpose_to_planes() {}
 void MeshSlabs::fill_ghost_planes(double*, std::size_t, int, int) const {}
 void MeshSlabs::combine_bits(std::span<double>) const {}
 std::int64_t MeshSlabs::sum(std::int64_t local) const { return local; }
+void MeshSlabs::sum(std::span<std::int64_t>) const {}
 double MeshSlabs::min(double local) const { return local; }
 double MeshSlabs::max(double local) const { return local; }
 std::vector<char> MeshSlabs::exchange(std::vector<char>&& bytes, std::vector<std::size_t>&) const {

@@ -51,6 +51,8 @@ class MeshSlabs {
   // left +0.0 (all bits clear) by the others, so the result is that rank's value exactly.
   void combine_bits(std::span<double> values) const;
   std::int64_t sum(std::int64_t local) const;
+  // Each element summed over the ranks, in place (every rank passes as many). Collective.
+  void sum(std::span<std::int64_t> values) const;
   double min(double local) const;
   double max(double local) const;
   // Sends `bytes` (to each rank q in turn, itself included, counts[q] bytes) and returns what

@@ -173,12 +173,20 @@ void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const doubl
 
 void PeriodicMesh::deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
                            const ForEach& for_each) {
+  begin_deposit(range);
+  add_masses(positions, masses, for_each);
+}
+
+void PeriodicMesh::begin_deposit(const MassRange& range) {
   std::fill(fixed_.begin(), fixed_.end(), 0);
   if (range.max == 0.0) return;
   const double bound = static_cast<double>(range.count) * (range.max / range.min);
   const int bits = std::min(40, 61 - static_cast<int>(std::ceil(std::log2(bound))));
   if (bits < 0) throw std::invalid_argument("PeriodicMesh: the masses span too wide a range for the fixed-point sum");
   fixed_unit_ = std::ldexp(range.min, -bits);
+}
+
+void PeriodicMesh::add_masses(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each) {
   const double unit_inv = 1.0 / fixed_unit_;
   const double cell_inv = n_ / box_;
   const int n = n_, x0 = x0_, nx = nx_;
@@ -198,6 +206,14 @@ void PeriodicMesh::deposit(std::span<const Vec3> positions, std::span<const doub
       std::atomic_ref<std::int64_t>(fixed_[node]).fetch_add(add, std::memory_order_relaxed);
     });
   });
+}
+
+double PeriodicMesh::background_potential() const {
+  std::int64_t assigned = 0;
+  for (const std::int64_t f : fixed_) assigned += f;
+  if (slabs_) assigned = slabs_->sum(assigned);
+  const double total_mass = static_cast<double>(assigned) * fixed_unit_;
+  return 4.0 * std::numbers::pi * G_ * r_s_ * r_s_ * total_mass / (box_ * box_ * box_);
 }
 
 // The Green's function per mode of this rank's y-planes (mode (i, j, k) at ((j - first) N +
@@ -318,7 +334,7 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
                 acceleration[p] = a;
                 potential[p] = phi;
               },
-              for_each);
+              background_potential(), for_each);
   if (slabs_) {
     // Every particle was interpolated by one rank; the others left it +0.0.
     slabs_->combine_bits(std::span<double>(reinterpret_cast<double*>(acceleration.data()), 3 * count));
@@ -326,13 +342,19 @@ void PeriodicMesh::compute(std::span<const Vec3> positions, std::span<const doub
   }
 }
 
-void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<const double> masses,
-                                 std::span<Vec3> acceleration, std::span<double> potential, const ForEach& for_each) {
+void PeriodicMesh::set_round_bytes(std::size_t bytes) {
+  round_particles_ = std::max<std::size_t>(1, bytes / (sizeof(Vec3) + sizeof(double) + sizeof(std::uint64_t)));
+}
+
+void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<const double> masses, const ForceSink& store,
+                                 const ForEach& for_each) {
   const std::size_t count = positions.size();
-  if (masses.size() != count || acceleration.size() != count || potential.size() != count)
-    throw std::invalid_argument("PeriodicMesh::compute_owned: positions, masses and outputs differ in length");
+  if (masses.size() != count)
+    throw std::invalid_argument("PeriodicMesh::compute_owned: positions and masses differ in length");
   if (!slabs_) {
-    compute(positions, masses, acceleration, potential, for_each);
+    assign(positions, masses, for_each);
+    solve(for_each);
+    interpolate(positions, masses, store, background_potential(), for_each);
     return;
   }
   // The fixed-point unit from every rank's masses, as one rank would find it from all of them.
@@ -341,8 +363,48 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
   range.min = std::isfinite(lightest) ? lightest : 0.0;
   range.max = slabs_->max(range.max);
   range.count = slabs_->sum(range.count);
-  // Each particle goes to the ranks of the planes its cloud touches (its lower plane's and the
-  // next one's); the rank of its lower plane interpolates it and sends its force back.
+  const int n = n_;
+  const auto planes = static_cast<std::size_t>(n);
+  const double cell_inv = n / box_;
+  const auto ranks = static_cast<std::size_t>(slabs_->ranks());
+  // This rank's particles ordered by the plane below their cloud (that plane's rank
+  // interpolates them; the next plane's rank takes a share of their mass too).
+  std::vector<std::size_t> from(planes + 1, 0);
+  std::vector<std::int64_t> per_plane(planes, 0);
+  std::vector<std::size_t> order(count);
+  {
+    std::vector<std::int32_t> lower(count);
+    for (std::size_t p = 0; p < count; ++p) {
+      const Vec3& x = positions[p];
+      if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+        throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
+      lower[p] = cloud_of(x, box_, cell_inv, n).w[0].lo;
+      ++per_plane[static_cast<std::size_t>(lower[p])];
+    }
+    for (std::size_t l = 0; l < planes; ++l) from[l + 1] = from[l] + static_cast<std::size_t>(per_plane[l]);
+    std::vector<std::size_t> fill(from.begin(), from.end() - 1);
+    for (std::size_t p = 0; p < count; ++p) order[fill[static_cast<std::size_t>(lower[p])]++] = p;
+  }
+  // Rounds: each rank's planes cut into runs that hold at most round_particles_ particles of
+  // all ranks (a plane at least), the same runs on every rank; round r takes every rank's r-th.
+  slabs_->sum(per_plane);
+  std::vector<int> round_of(planes, 0);
+  int rounds = 0;
+  for (int q = 0; q < slabs_->ranks(); ++q) {
+    int r = 0;
+    std::int64_t held = 0;
+    for (int l = slabs_->first_plane(q); l < slabs_->first_plane(q) + slabs_->planes(q); ++l) {
+      const std::int64_t c = per_plane[static_cast<std::size_t>(l)];
+      if (held > 0 && held + c > static_cast<std::int64_t>(round_particles_)) {
+        ++r;
+        held = 0;
+      }
+      round_of[static_cast<std::size_t>(l)] = r;
+      held += c;
+    }
+    if (slabs_->planes(q) > 0) rounds = std::max(rounds, r + 1);
+  }
+  std::vector<std::int64_t>().swap(per_plane);
   struct Sent {
     Vec3 x;
     double m;
@@ -353,42 +415,44 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
     Vec3 acceleration;
     double potential;
   };
-  const int n = n_;
-  const double cell_inv = n / box_;
-  const auto ranks = static_cast<std::size_t>(slabs_->ranks());
-  // Buffers of exactly the records they carry, each freed once read: the exchange's memory
-  // stays a few tens of bytes a particle beside the mesh.
-  auto lower_plane = [&](const Vec3& x) { return cloud_of(x, box_, cell_inv, n).w[0].lo; };
-  std::vector<std::size_t> counts(ranks, 0);
-  for (std::size_t p = 0; p < count; ++p) {
-    const Vec3& x = positions[p];
-    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
-      throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
-    const int lo = lower_plane(x);
-    const int q_lo = slabs_->owner_of(lo), q_hi = slabs_->owner_of((lo + 1) % n);
-    ++counts[static_cast<std::size_t>(q_lo)];
-    if (q_hi != q_lo) ++counts[static_cast<std::size_t>(q_hi)];
-  }
-  std::vector<std::size_t> at(ranks, 0);
-  for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1] * sizeof(Sent);
-  std::vector<char> send((at.back() + counts.back() * sizeof(Sent)));
-  for (std::size_t p = 0; p < count; ++p) {
-    const int lo = lower_plane(positions[p]);
-    const auto q_lo = static_cast<std::size_t>(slabs_->owner_of(lo)), q_hi = static_cast<std::size_t>(slabs_->owner_of((lo + 1) % n));
-    const Sent record{positions[p], masses[p], p};
-    std::memcpy(send.data() + at[q_lo], &record, sizeof record);
-    at[q_lo] += sizeof record;
-    if (q_hi != q_lo) {
-      std::memcpy(send.data() + at[q_hi], &record, sizeof record);
-      at[q_hi] += sizeof record;
+  // Round r's records: every particle whose lower plane is in the round to that plane's rank
+  // and, with `upper`, to the next plane's where that differs.
+  std::vector<std::size_t> counts(ranks), at(ranks);
+  auto pack = [&](int r, bool upper) {
+    std::fill(counts.begin(), counts.end(), 0);
+    for (std::size_t l = 0; l < planes; ++l) {
+      if (round_of[l] != r) continue;
+      const auto lo = static_cast<std::size_t>(slabs_->owner_of(static_cast<int>(l)));
+      const auto hi = static_cast<std::size_t>(slabs_->owner_of(static_cast<int>((l + 1) % planes)));
+      counts[lo] += from[l + 1] - from[l];
+      if (upper && hi != lo) counts[hi] += from[l + 1] - from[l];
     }
-  }
-  for (std::size_t& c : counts) c *= sizeof(Sent);
+    at[0] = 0;
+    for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1] * sizeof(Sent);
+    std::vector<char> send(at.back() + counts.back() * sizeof(Sent));
+    for (std::size_t l = 0; l < planes; ++l) {
+      if (round_of[l] != r) continue;
+      const auto lo = static_cast<std::size_t>(slabs_->owner_of(static_cast<int>(l)));
+      const auto hi = static_cast<std::size_t>(slabs_->owner_of(static_cast<int>((l + 1) % planes)));
+      for (std::size_t k = from[l]; k < from[l + 1]; ++k) {
+        const std::size_t p = order[k];
+        const Sent record{positions[p], masses[p], p};
+        std::memcpy(send.data() + at[lo], &record, sizeof record);
+        at[lo] += sizeof record;
+        if (upper && hi != lo) {
+          std::memcpy(send.data() + at[hi], &record, sizeof record);
+          at[hi] += sizeof record;
+        }
+      }
+    }
+    for (std::size_t& c : counts) c *= sizeof(Sent);
+    return send;
+  };
+  // What came in: positions, masses and (sender, its index) of each record.
   std::vector<Vec3> x_in;
   std::vector<double> m_in;
-  std::vector<std::pair<std::uint32_t, std::uint64_t>> origin;  // (sender, its index)
-  {
-    const std::vector<char> in = slabs_->exchange(std::move(send), counts);
+  std::vector<std::pair<std::uint32_t, std::uint64_t>> origin;
+  auto unpack = [&](const std::vector<char>& in) {
     const std::size_t records = in.size() / sizeof(Sent);
     x_in.resize(records);
     m_in.resize(records);
@@ -402,53 +466,54 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
         m_in[k] = s.m;
         origin[k] = {static_cast<std::uint32_t>(q), s.p};
       }
+  };
+  begin_deposit(range);
+  for (int r = 0; r < rounds; ++r) {
+    unpack(slabs_->exchange(pack(r, true), counts));
+    add_masses(x_in, m_in, for_each);
   }
-  deposit(x_in, m_in, range, for_each);
   solve(for_each);
-  // Back to each sender, the forces of the particles whose lower plane is here, each
-  // interpolated straight into its record's place (its offset within its sender's part).
-  std::fill(counts.begin(), counts.end(), 0);
-  std::vector<std::size_t> place(x_in.size());
-  for (std::size_t k = 0; k < x_in.size(); ++k) {
-    const int lo = lower_plane(x_in[k]) - x0_;
-    if (lo < 0 || lo >= nx_) continue;
-    place[k] = counts[origin[k].first];
-    counts[origin[k].first] += sizeof(Back);
+  // The same rounds again, each particle to the rank of its lower plane only, which sends its
+  // force back, interpolated straight into its record's place (its offset within its
+  // sender's part). Positions travel twice so that no round's records outlive it.
+  const double background = background_potential();
+  std::vector<std::size_t> place;
+  std::size_t forces = 0;
+  for (int r = 0; r < rounds; ++r) {
+    unpack(slabs_->exchange(pack(r, false), counts));
+    std::fill(counts.begin(), counts.end(), 0);
+    place.resize(x_in.size());
+    for (std::size_t k = 0; k < x_in.size(); ++k) {
+      place[k] = counts[origin[k].first];
+      counts[origin[k].first] += sizeof(Back);
+    }
+    at[0] = 0;
+    for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1];
+    std::vector<char> back(at.back() + counts.back());
+    interpolate(x_in, m_in,
+                [&](std::size_t k, const Vec3& a, double phi) {
+                  const Back record{origin[k].second, a, phi};
+                  std::memcpy(back.data() + at[origin[k].first] + place[k], &record, sizeof record);
+                },
+                background, for_each);
+    const std::vector<char> in = slabs_->exchange(std::move(back), counts);
+    for (std::size_t b = 0; b < in.size(); b += sizeof(Back)) {
+      Back rec;
+      std::memcpy(&rec, in.data() + b, sizeof rec);
+      if (rec.p >= count) throw std::logic_error("PeriodicMesh::compute_owned: a force came back for no particle");
+      store(rec.p, rec.acceleration, rec.potential);
+    }
+    forces += in.size() / sizeof(Back);
   }
-  at[0] = 0;
-  for (std::size_t q = 1; q < ranks; ++q) at[q] = at[q - 1] + counts[q - 1];
-  std::vector<char> back(at.back() + counts.back());
-  interpolate(x_in, m_in,
-              [&](std::size_t k, const Vec3& a, double phi) {
-                const Back record{origin[k].second, a, phi};
-                std::memcpy(back.data() + at[origin[k].first] + place[k], &record, sizeof record);
-              },
-              for_each);
-  std::vector<Vec3>().swap(x_in);
-  std::vector<double>().swap(m_in);
-  std::vector<std::size_t>().swap(place);
-  const std::vector<char> in = slabs_->exchange(std::move(back), counts);
-  if (in.size() != count * sizeof(Back))
-    throw std::logic_error("PeriodicMesh::compute_owned: " + std::to_string(in.size() / sizeof(Back)) +
-                           " forces came back for " + std::to_string(count) + " particles");
-  for (std::size_t b = 0; b < in.size(); b += sizeof(Back)) {
-    Back r;
-    std::memcpy(&r, in.data() + b, sizeof r);
-    if (r.p >= count) throw std::logic_error("PeriodicMesh::compute_owned: a force came back for no particle");
-    acceleration[r.p] = r.acceleration;
-    potential[r.p] = r.potential;
-  }
+  if (forces != count)
+    throw std::logic_error("PeriodicMesh::compute_owned: " + std::to_string(forces) + " forces came back for " +
+                           std::to_string(count) + " particles");
 }
 
 template <class Store>
 void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const double> masses, const Store& store,
-                               const ForEach& for_each) {
+                               double background, const ForEach& for_each) {
   const std::size_t count = positions.size();
-  std::int64_t assigned = 0;
-  for (const std::int64_t f : fixed_) assigned += f;
-  if (slabs_) assigned = slabs_->sum(assigned);
-  const double total_mass = static_cast<double>(assigned) * fixed_unit_;
-  const double background = 4.0 * std::numbers::pi * G_ * r_s_ * r_s_ * total_mass / (box_ * box_ * box_);
   const double self = G_ / (std::sqrt(std::numbers::pi) * r_s_);
 
   const int n = n_, nx = nx_, x0 = x0_;
@@ -494,6 +559,9 @@ void PeriodicMesh::interpolate(std::span<const Vec3> positions, std::span<const 
   const int runs = (nx + kGradientRun - 1) / kGradientRun;
   for_each_or_serial(for_each, static_cast<std::size_t>(runs), [&](std::size_t r) {
     const int first = static_cast<int>(r) * kGradientRun, end = std::min(nx, first + kGradientRun);
+    // A round of compute_owned brings the particles of a few planes: the others' runs have
+    // no gradient to make.
+    if (start[static_cast<std::size_t>(first)] == start[static_cast<std::size_t>(end)]) return;
     std::vector<double> window(2 * 3 * plane_nodes);
     double* below = window.data();
     double* above = below + 3 * plane_nodes;

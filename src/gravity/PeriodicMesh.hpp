@@ -1,6 +1,7 @@
 // The long-range half of periodic TreePM gravity: mass onto a mesh, Poisson's equation by FFT, forces back to the particles.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -49,12 +50,19 @@ class PeriodicMesh {
   // the mesh).
   void compute(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
                std::span<double> potential, const ForEach& for_each = {});
+  // Receives a particle's index, long-range acceleration and potential; it may be called from
+  // any thread, once per index.
+  using ForceSink = std::function<void(std::size_t, const Vec3&, double)>;
   // The same where each rank passes only its own particles and gets their forces: each goes
   // to the ranks whose planes its cloud reaches, and comes back from the one that interpolates
   // it. The mesh and every force have compute()'s bits over all ranks' particles together.
-  // Collective.
-  void compute_owned(std::span<const Vec3> positions, std::span<const double> masses, std::span<Vec3> acceleration,
-                     std::span<double> potential, const ForEach& for_each = {});
+  // The particles travel in rounds, each a run of planes that receives at most
+  // round_particles() particles (more only where one plane holds more), so the exchange's
+  // memory follows a round, not the particle count. Collective.
+  void compute_owned(std::span<const Vec3> positions, std::span<const double> masses, const ForceSink& store,
+                     const ForEach& for_each = {});
+  void set_round_bytes(std::size_t bytes);
+  std::size_t round_particles() const { return round_particles_; }
 
   // The assigned mass per node of this rank's planes in the last compute, in the fixed-point
   // units (node index ((i - first_plane()) N + j) N + k for node position (i, j, k) Delta):
@@ -81,12 +89,18 @@ class PeriodicMesh {
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
   void deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
                const ForEach& for_each);
+  // deposit() in parts: the fixed-point unit set and the mesh cleared, then masses added (in
+  // any order and any parts: the sums are integers).
+  void begin_deposit(const MassRange& range);
+  void add_masses(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
+  // The potential's constant part, 4 pi G r_s^2 M / L^3 (M from the mesh). Collective.
+  double background_potential() const;
   // The force and potential at each of `positions` whose lower plane is this rank's, given to
   // store(index, acceleration, potential) (from any thread, each index once); the others are
   // skipped.
   template <class Store>
   void interpolate(std::span<const Vec3> positions, std::span<const double> masses, const Store& store,
-                   const ForEach& for_each);
+                   double background, const ForEach& for_each);
   void solve(const ForEach& for_each);
   void transpose(bool to_columns, const ForEach& for_each);
   std::vector<double> green_function() const;
@@ -98,6 +112,7 @@ class PeriodicMesh {
   std::unique_ptr<MeshSlabs> slabs_;
   int x0_ = 0, nx_ = 0;  // this rank's planes
   double fixed_unit_ = 1.0;  // mass of one fixed-point unit
+  std::size_t round_particles_ = 26214;  // compute_owned's rounds: 1 MiB of 40-byte records
   std::vector<std::int64_t> fixed_;
   std::vector<double> green_;     // per mode of this rank's y-planes (green_function)
   struct Fft;

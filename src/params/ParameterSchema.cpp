@@ -210,7 +210,7 @@ const std::vector<ParamSpec>& parameter_schema() {
       boolean("domain.assemble_gravity_tree", "false",
               "Across MPI ranks, with gravity: each rank builds the tree of its own cells' particles and, each step, receives from the other ranks what of their trees its walks open, where otherwise every rank builds the whole tree from every particle. The results are the same bits; while every rank holds every particle the whole tree costs less time and traffic (docs/performance.md)."),
       integer("domain.message_bytes", "1048576", 1, 1e15,
-              "Across MPI ranks, in halo mode: the most bytes one round of an all-to-all carries from a rank to another (a recut's particles; the exchange after each task graph, in whole cells); a larger exchange goes in several rounds, so that the buffers kept for them stay about this size."),
+              "Across MPI ranks, in halo mode: the most bytes one round of an all-to-all carries from a rank to another (a recut's particles; the exchange after each task graph, in whole cells), and about the most a rank receives in one round of the periodic mesh's particle exchange (whole planes); a larger exchange goes in several rounds, so that the buffers kept for them stay about this size."),
   };
   return schema;
 }
