@@ -178,6 +178,14 @@ void compute_long_range(StepContext& ctx) {
   // step's other changes).
   std::vector<std::size_t> g, d;
   if (ctx.halo_mode) {
+    std::size_t n_gas = 0, n_dm = 0;
+    for (const int c : ctx.space.leaves()) {
+      if (!ctx.owns_leaf(c)) continue;
+      n_gas += ctx.space.cell(c).count;
+      n_dm += ctx.space.cell(c).dm_count;
+    }
+    g.reserve(n_gas);
+    d.reserve(n_dm);
     for (const int c : ctx.space.leaves()) {
       if (!ctx.owns_leaf(c)) continue;
       const Cell& cell = ctx.space.cell(c);
@@ -190,20 +198,9 @@ void compute_long_range(StepContext& ctx) {
     std::iota(g.begin(), g.end(), std::size_t{0});
     std::iota(d.begin(), d.end(), std::size_t{0});
   }
-  const std::size_t n = g.size() + d.size();
-  std::vector<Vec3> x(n);
-  std::vector<double> m(n);
-  for (std::size_t k = 0; k < g.size(); ++k) {
-    x[k] = gas.x[g[k]];
-    m[k] = gas.dynamical_mass(g[k]);
-  }
-  for (std::size_t k = 0; k < d.size(); ++k) {
-    x[g.size() + k] = dm.x[d[k]];
-    m[g.size() + k] = dm.mass[d[k]];
-  }
+  const std::size_t n_gas = g.size(), n = g.size() + d.size();
   // The results go into the particles' fields at once: nothing of this is kept between
   // mesh steps.
-  const std::size_t n_gas = g.size();
   auto store = [&](std::size_t k, const Vec3& a, double phi) {
     if (k < n_gas) {
       gas.a_mesh[g[k]] = a;
@@ -214,8 +211,19 @@ void compute_long_range(StepContext& ctx) {
     }
   };
   if (ctx.halo_mode) {
-    lr.mesh.compute_owned(x, m, store, ctx.in_task_for_each);
+    // Read where they lie: copies of positions and masses would add 32 bytes a particle to
+    // the peak of a mesh step.
+    const gravity::PeriodicMesh::Sources sources{
+        n, [&](std::size_t k) { return k < n_gas ? gas.x[g[k]] : dm.x[d[k - n_gas]]; },
+        [&](std::size_t k) { return k < n_gas ? gas.dynamical_mass(g[k]) : dm.mass[d[k - n_gas]]; }};
+    lr.mesh.compute_owned(sources, store, ctx.in_task_for_each);
     return;
+  }
+  std::vector<Vec3> x(n);
+  std::vector<double> m(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    x[k] = k < n_gas ? gas.x[g[k]] : dm.x[d[k - n_gas]];
+    m[k] = k < n_gas ? gas.dynamical_mass(g[k]) : dm.mass[d[k - n_gas]];
   }
   std::vector<Vec3> acceleration(n);
   std::vector<double> potential(n);

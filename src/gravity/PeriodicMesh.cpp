@@ -154,11 +154,11 @@ std::size_t PeriodicMesh::bytes() const {
 // cannot overflow (N m_max / m_min < 2^22), coarser otherwise. The unit depends only on the
 // set, and integer sums do not depend on their order. Each rank adds only the nodes of its
 // own planes, from every particle whose cloud reaches them.
-PeriodicMesh::MassRange PeriodicMesh::mass_range(std::span<const double> masses) {
+PeriodicMesh::MassRange PeriodicMesh::mass_range(std::size_t count, const std::function<double(std::size_t)>& mass) {
   MassRange r;
-  r.count = static_cast<std::int64_t>(masses.size());
-  for (std::size_t p = 0; p < masses.size(); ++p) {
-    const double m = masses[p];
+  r.count = static_cast<std::int64_t>(count);
+  for (std::size_t p = 0; p < count; ++p) {
+    const double m = mass(p);
     if (!(m >= 0.0) || !std::isfinite(m))
       throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a negative or non-finite mass");
     if (m > 0.0) r.min = r.min == 0.0 ? m : std::min(r.min, m);
@@ -168,7 +168,7 @@ PeriodicMesh::MassRange PeriodicMesh::mass_range(std::span<const double> masses)
 }
 
 void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each) {
-  deposit(positions, masses, mass_range(masses), for_each);
+  deposit(positions, masses, mass_range(masses.size(), [&](std::size_t p) { return masses[p]; }), for_each);
 }
 
 void PeriodicMesh::deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
@@ -346,19 +346,22 @@ void PeriodicMesh::set_round_bytes(std::size_t bytes) {
   round_particles_ = std::max<std::size_t>(1, bytes / (sizeof(Vec3) + sizeof(double) + sizeof(std::uint64_t)));
 }
 
-void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<const double> masses, const ForceSink& store,
-                                 const ForEach& for_each) {
-  const std::size_t count = positions.size();
-  if (masses.size() != count)
-    throw std::invalid_argument("PeriodicMesh::compute_owned: positions and masses differ in length");
+void PeriodicMesh::compute_owned(const Sources& sources, const ForceSink& store, const ForEach& for_each) {
+  const std::size_t count = sources.count;
   if (!slabs_) {
-    assign(positions, masses, for_each);
+    std::vector<Vec3> x(count);
+    std::vector<double> m(count);
+    for (std::size_t p = 0; p < count; ++p) {
+      x[p] = sources.position(p);
+      m[p] = sources.mass(p);
+    }
+    assign(x, m, for_each);
     solve(for_each);
-    interpolate(positions, masses, store, background_potential(), for_each);
+    interpolate(x, m, store, background_potential(), for_each);
     return;
   }
   // The fixed-point unit from every rank's masses, as one rank would find it from all of them.
-  MassRange range = mass_range(masses);
+  MassRange range = mass_range(count, sources.mass);
   const double lightest = slabs_->min(range.min > 0.0 ? range.min : std::numeric_limits<double>::infinity());
   range.min = std::isfinite(lightest) ? lightest : 0.0;
   range.max = slabs_->max(range.max);
@@ -375,7 +378,7 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
   {
     std::vector<std::int32_t> lower(count);
     for (std::size_t p = 0; p < count; ++p) {
-      const Vec3& x = positions[p];
+      const Vec3 x = sources.position(p);
       if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
         throw std::invalid_argument("PeriodicMesh: particle " + std::to_string(p) + " has a non-finite position");
       lower[p] = cloud_of(x, box_, cell_inv, n).w[0].lo;
@@ -436,7 +439,7 @@ void PeriodicMesh::compute_owned(std::span<const Vec3> positions, std::span<cons
       const auto hi = static_cast<std::size_t>(slabs_->owner_of(static_cast<int>((l + 1) % planes)));
       for (std::size_t k = from[l]; k < from[l + 1]; ++k) {
         const std::size_t p = order[k];
-        const Sent record{positions[p], masses[p], p};
+        const Sent record{sources.position(p), sources.mass(p), p};
         std::memcpy(send.data() + at[lo], &record, sizeof record);
         at[lo] += sizeof record;
         if (upper && hi != lo) {

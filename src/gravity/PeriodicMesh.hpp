@@ -59,8 +59,13 @@ class PeriodicMesh {
   // The particles travel in rounds, each a run of planes that receives at most
   // round_particles() particles (more only where one plane holds more), so the exchange's
   // memory follows a round, not the particle count. Collective.
-  void compute_owned(std::span<const Vec3> positions, std::span<const double> masses, const ForceSink& store,
-                     const ForEach& for_each = {});
+  // The particles are read where they lie, by index in [0, count).
+  struct Sources {
+    std::size_t count = 0;
+    std::function<Vec3(std::size_t)> position;
+    std::function<double(std::size_t)> mass;
+  };
+  void compute_owned(const Sources& sources, const ForceSink& store, const ForEach& for_each = {});
   void set_round_bytes(std::size_t bytes);
   std::size_t round_particles() const { return round_particles_; }
 
@@ -85,7 +90,7 @@ class PeriodicMesh {
     double min = 0.0, max = 0.0;
     std::int64_t count = 0;
   };
-  static MassRange mass_range(std::span<const double> masses);
+  static MassRange mass_range(std::size_t count, const std::function<double(std::size_t)>& mass);
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
   void deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
                const ForEach& for_each);
