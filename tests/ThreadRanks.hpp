@@ -31,7 +31,7 @@ class ThreadRanks {
       all_.barrier_.arrive_and_wait();
       return out;
     }
-    std::vector<std::vector<char>> alltoall(const std::vector<std::vector<char>>& to) override {
+    std::vector<std::vector<char>> alltoall(std::vector<std::vector<char>> to) override {
       for (int q = 0; q < all_.ranks_; ++q)
         if (q != rank_) all_.mail_[static_cast<std::size_t>(q)][static_cast<std::size_t>(rank_)] = to[static_cast<std::size_t>(q)];
       all_.barrier_.arrive_and_wait();

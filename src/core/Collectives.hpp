@@ -14,8 +14,9 @@ class Collectives {
   virtual int size() const = 0;
   // Every rank's buffer, indexed by rank (this rank's own included).
   virtual std::vector<std::vector<char>> allgather(std::span<const char> mine) = 0;
-  // to[q] goes to rank q (this rank's own is not sent): what each rank sent to this one.
-  virtual std::vector<std::vector<char>> alltoall(const std::vector<std::vector<char>>& to) = 0;
+  // to[q] goes to rank q (this rank's own is not sent): what each rank sent to this one. The
+  // buffers are taken, so that an implementation can free each once it is sent.
+  virtual std::vector<std::vector<char>> alltoall(std::vector<std::vector<char>> to) = 0;
 };
 
 }  // namespace fountain

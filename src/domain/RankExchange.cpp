@@ -274,6 +274,11 @@ void RankExchange::release_buffers() {
   Buffer().swap(received_);
 }
 
+void RankExchange::release_alltoall_buffers() {
+  std::vector<char>().swap(scattered_);
+  std::vector<char>().swap(sending_);
+}
+
 RankExchange::Traffic RankExchange::traffic() const {
   std::lock_guard lock(mutex_);
   return traffic_;

@@ -79,6 +79,8 @@ class RankExchange {
   // Frees the buffers the collectives and receive() keep for reuse (after an exchange far
   // larger than the run's usual ones, which would otherwise hold its memory to the end).
   void release_buffers();
+  // Frees only those of alltoall (its packed sends and what it received).
+  void release_alltoall_buffers();
   void reset_traffic();
 
  private:

@@ -617,7 +617,7 @@ class TreeAssembler {
       }
       counts_.bytes_sent += static_cast<std::int64_t>(out.size());
     }
-    received_ = ranks_->alltoall(to);
+    received_ = ranks_->alltoall(std::move(to));
   }
 
   // The tree for this step's walks. Its first nodes and sources stay from the build: this

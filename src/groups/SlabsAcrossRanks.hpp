@@ -52,7 +52,7 @@ std::vector<T> exchange(std::vector<std::vector<T>>& to, Collectives* ranks) {
       out[q] = bytes_of(to[q]);
       std::vector<T>().swap(to[q]);
     }
-  const std::vector<std::vector<char>> in = ranks->alltoall(out);
+  const std::vector<std::vector<char>> in = ranks->alltoall(std::move(out));
   std::vector<T> arrived;
   for (std::size_t q = 0; q < to.size(); ++q) {
     if (static_cast<int>(q) == me) arrived.insert(arrived.end(), to[q].begin(), to[q].end());
