@@ -534,20 +534,24 @@ class TreeAssembler {
   // What of one held subtree the walks of `groups` may visit, in preorder: a node every group
   // passes by or accepts goes without its inside; one some group opens, with its children; one
   // some group lists, with its sources.
-  void export_block(const Block& block, const std::vector<GravityTree::Group>& groups,
-                    const GravityTree::WalkRules& rules, std::vector<char>& message) {
+  // What of one own subtree a rank's batches may visit: its nodes and listed sources.
+  struct ExportedBlock {
     std::vector<Exported> nodes;
     std::vector<SourceRecord> sources;
+    std::size_t bytes() const {
+      return 2 * sizeof(std::int64_t) + nodes.size() * sizeof(Exported) + sources.size() * sizeof(SourceRecord);
+    }
+  };
+
+  ExportedBlock export_block(const Block& block, const std::vector<GravityTree::Group>& groups,
+                             const GravityTree::WalkRules& rules) {
+    ExportedBlock out;
     std::vector<std::int32_t> all(groups.size());
     for (std::size_t k = 0; k < all.size(); ++k) all[k] = static_cast<std::int32_t>(k);
-    export_node(block.root, groups, all, rules, nodes, sources);
-    MessageWriter w(message);
-    w.put(static_cast<std::int64_t>(nodes.size()));
-    w.put(static_cast<std::int64_t>(sources.size()));
-    w.put(nodes.data(), nodes.size());
-    w.put(sources.data(), sources.size());
-    counts_.nodes_sent += static_cast<std::int64_t>(nodes.size());
-    counts_.sources_sent += static_cast<std::int64_t>(sources.size());
+    export_node(block.root, groups, all, rules, out.nodes, out.sources);
+    counts_.nodes_sent += static_cast<std::int64_t>(out.nodes.size());
+    counts_.sources_sent += static_cast<std::int64_t>(out.sources.size());
+    return out;
   }
 
   void export_node(std::int32_t n, const std::vector<GravityTree::Group>& groups, const std::vector<std::int32_t>& active,
@@ -608,12 +612,27 @@ class TreeAssembler {
       MessageReader in(all[static_cast<std::size_t>(q)]);
       for (std::size_t k = 0; k < all[static_cast<std::size_t>(q)].size() / sizeof(Envelope); ++k)
         for (const auto& g : envelope_groups(in.get<Envelope>())) groups.push_back(g);
-      // In the order the receiver reads them: the top's preorder.
-      auto& out = to[static_cast<std::size_t>(q)];
+      // In the order the receiver reads them: the top's preorder. The message is the largest
+      // of a step (megabytes): made at its size from the blocks, each freed once written,
+      // rather than grown by doubling.
+      std::vector<ExportedBlock> blocks;
+      std::size_t bytes = 0;
       for (const std::int32_t t : order_) {
         const TopNode& node = top_[static_cast<std::size_t>(t)];
-        if (node.kind == Kind::held && node.owner == ranks_->rank())
-          export_block(own_blocks_[static_cast<std::size_t>(node.part)], groups, rules, out);
+        if (node.kind == Kind::held && node.owner == ranks_->rank()) {
+          blocks.push_back(export_block(own_blocks_[static_cast<std::size_t>(node.part)], groups, rules));
+          bytes += blocks.back().bytes();
+        }
+      }
+      auto& out = to[static_cast<std::size_t>(q)];
+      out.reserve(bytes);
+      MessageWriter w(out);
+      for (ExportedBlock& b : blocks) {
+        w.put(static_cast<std::int64_t>(b.nodes.size()));
+        w.put(static_cast<std::int64_t>(b.sources.size()));
+        w.put(b.nodes.data(), b.nodes.size());
+        w.put(b.sources.data(), b.sources.size());
+        b = ExportedBlock{};
       }
       counts_.bytes_sent += static_cast<std::int64_t>(out.size());
     }
