@@ -116,10 +116,10 @@ void expect_same_forces(const Sources& built, const Case& c, int ranks, const st
     }
     std::vector<TargetBatch> batches;
     for (const auto& b : local) batches.push_back({b});
-    TreeAcrossRanks across(messages, RankSources{x, m, eps, places}, c.tree, c.walk);
+    TreeAcrossRanks across(messages, RankSources::of_arrays(x, m, eps, places), c.tree, c.walk);
     if (moved) {
       for (std::size_t k = 0; k < mine.size(); ++k) x[k] = s.x[mine[k]];
-      across.refit(messages, RankSources{x, m, eps, places});
+      across.refit(messages, RankSources::of_arrays(x, m, eps, places));
       if (loose) {
         EXPECT_EQ(across.loose(), *loose);
       }
@@ -233,7 +233,7 @@ TEST(TreeAcrossRanks, AWalkBeyondTheBatchesItWasAssembledForThrows) {
         places.push_back(i);
       }
     const Case c = open_case(OpeningCriterion::gadget2_monopole);
-    TreeAcrossRanks across(messages, RankSources{x, m, eps, places}, c.tree, c.walk);
+    TreeAcrossRanks across(messages, RankSources::of_arrays(x, m, eps, places), c.tree, c.walk);
     GravityTree tree = across.tree_for(messages, {});
     EXPECT_THROW(tree.refit(x, m, eps), std::logic_error);  // assembled trees are assembled anew
     if (r != 0) return;
@@ -248,7 +248,7 @@ TEST(TreeAcrossRanks, AWalkBeyondTheBatchesItWasAssembledForThrows) {
     const std::vector<Vec3> x{{0, 0, 0}, {1, 1, 1}};
     const std::vector<double> m{1, 1}, eps{0.1, 0.1};
     const std::vector<std::uint64_t> places{1, 0};
-    const TreeAcrossRanks across(messages, RankSources{x, m, eps, places}, TreeConfig{}, WalkConfig{});
+    const TreeAcrossRanks across(messages, RankSources::of_arrays(x, m, eps, places), TreeConfig{}, WalkConfig{});
   }),
                std::invalid_argument);
 }
@@ -287,7 +287,7 @@ TEST(TreeAcrossRanks, ARankWithoutSourcesWalksTheTreeAnotherRankHoldsWhole) {
     std::vector<std::uint64_t> places;
     if (r == 0)
       for (std::size_t i = 0; i < s.x.size(); ++i) places.push_back(i);
-    const RankSources mine = r == 0 ? RankSources{s.x, s.m, s.eps, places} : RankSources{};
+    const RankSources mine = r == 0 ? RankSources::of_arrays(s.x, s.m, s.eps, places) : RankSources{};
     TreeAcrossRanks across(messages, mine, c.tree, c.walk);
     std::vector<TargetBatch> mine_to_walk;
     if (r == 1)

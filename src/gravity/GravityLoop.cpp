@@ -98,35 +98,16 @@ void order_own_sources(StepContext& ctx) {
   }
 }
 
-struct OwnSources {
-  std::vector<Vec3> x;
-  std::vector<double> m, eps;
-  std::span<const std::uint64_t> places;
-  std::span<const std::int32_t> names;
-  RankSources view() const { return {x, m, eps, places, names}; }
-};
-OwnSources own_sources(const StepContext& ctx) {
-  const GasParticles& gas = ctx.gas;
-  const CollisionlessParticles& dm = ctx.dm;
+RankSources own_sources(const StepContext& ctx) {
   const StepContext::OwnSourceOrder& order = ctx.own_source_order;
-  const std::size_t n = order.names.size();
-  OwnSources s;
-  s.x.resize(n);
-  s.m.resize(n);
-  s.eps.resize(n);
-  for (std::size_t k = 0; k < n; ++k) {
+  RankSources s;
+  s.count = order.names.size();
+  s.source = [&ctx, &order](std::size_t k) {
     const auto i = static_cast<std::size_t>(order.names[k]);
-    if (k < order.gas) {
-      s.x[k] = gas.x[i];
-      s.m[k] = gas.dynamical_mass(i);
-      s.eps[k] = ctx.softening_gas();
-    } else {
-      const std::size_t j = i - order.gas_arrays;
-      s.x[k] = dm.x[j];
-      s.m[k] = dm.mass[j];
-      s.eps[k] = ctx.softening_of(j);
-    }
-  }
+    if (k < order.gas) return RankSources::Source{ctx.gas.x[i], ctx.gas.dynamical_mass(i), ctx.softening_gas()};
+    const std::size_t j = i - order.gas_arrays;
+    return RankSources::Source{ctx.dm.x[j], ctx.dm.mass[j], ctx.softening_of(j)};
+  };
   s.places = order.places;
   s.names = order.names;
   return s;
@@ -141,8 +122,7 @@ void build_tree(StepContext& ctx) {
   if (ctx.tree_messages) {
     ctx.tree_across.reset();  // not beside the new one
     order_own_sources(ctx);
-    const OwnSources own = own_sources(ctx);
-    ctx.tree_across = std::make_unique<TreeAcrossRanks>(*ctx.tree_messages, own.view(), tree_config(ctx), walk_config(ctx));
+    ctx.tree_across = std::make_unique<TreeAcrossRanks>(*ctx.tree_messages, own_sources(ctx), tree_config(ctx), walk_config(ctx));
     ctx.tree.reset();  // assembled for each step's walks (finish_tree)
     return;
   }
@@ -268,7 +248,7 @@ void finish_tree(StepContext& ctx) {
       // changed count).
       const StepContext::OwnSourceOrder& order = ctx.own_source_order;
       if (order.gas_arrays != ctx.gas.size() || order.dm_arrays != ctx.dm.size()) order_own_sources(ctx);
-      ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx).view());
+      ctx.tree_across->refit(*ctx.tree_messages, own_sources(ctx));
     } else if (ctx.tree_update == StepContext::TreeUpdate::build) {
       build_tree(ctx);
     }

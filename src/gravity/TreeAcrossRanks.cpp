@@ -76,7 +76,7 @@ class TreeAssembler {
     std::size_t kept = 0;
     for (const TopNode& node : top_)
       if (node.kind == Kind::gathered) kept += static_cast<std::size_t>(node.total);
-    kept += mine_.positions.size();
+    kept += mine_.count;
     kept_sources_ = kept;
     tree_.nodes_.reserve(GravityTree::node_estimate(kept, tree_config_.max_leaf_size));
     tree_.index_.reserve(kept);
@@ -97,8 +97,8 @@ class TreeAssembler {
 
   void refit(TreeMessages& ranks, const RankSources& mine) {
     check(mine);
-    if (mine.positions.size() != own_count_)
-      throw std::invalid_argument("TreeAcrossRanks::refit: " + std::to_string(mine.positions.size()) +
+    if (mine.count != own_count_)
+      throw std::invalid_argument("TreeAcrossRanks::refit: " + std::to_string(mine.count) +
                                   " sources for a tree of " + std::to_string(own_count_));
     ranks_ = &ranks;
     mine_ = mine;
@@ -159,10 +159,10 @@ class TreeAssembler {
   };
 
   static void check(const RankSources& mine) {
-    const std::size_t n = mine.positions.size();
-    if (mine.masses.size() != n || mine.softenings.size() != n || mine.places.size() != n ||
-        (!mine.names.empty() && mine.names.size() != n))
-      throw std::invalid_argument("TreeAcrossRanks: positions, masses, softenings, places and names differ in length");
+    const std::size_t n = mine.count;
+    if (mine.places.size() != n || (!mine.names.empty() && mine.names.size() != n))
+      throw std::invalid_argument("TreeAcrossRanks: the sources, their places and their names differ in number");
+    if (n > 0 && !mine.source) throw std::invalid_argument("TreeAcrossRanks: sources without a way to read them");
     for (std::size_t i = 1; i < n; ++i)
       if (!(mine.places[i - 1] < mine.places[i]))
         throw std::invalid_argument("TreeAcrossRanks: source " + std::to_string(i) +
@@ -175,17 +175,19 @@ class TreeAssembler {
     Vec3 lo{std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
             std::numeric_limits<double>::infinity()};
     Vec3 hi = -1.0 * lo;
-    for (const Vec3& x : mine_.positions)
+    for (std::size_t k = 0; k < mine_.count; ++k) {
+      const Vec3 x = mine_.source(k).position;
       for (int d = 0; d < 3; ++d) {
         lo[d] = std::min(lo[d], x[d]);
         hi[d] = std::max(hi[d], x[d]);
       }
-    own_count_ = mine_.positions.size();
+    }
+    own_count_ = mine_.count;
     std::vector<char> message;
     MessageWriter w(message);
     w.put(lo);
     w.put(hi);
-    w.put(static_cast<std::int64_t>(mine_.positions.size()));
+    w.put(static_cast<std::int64_t>(mine_.count));
     std::int64_t total = 0;
     for (const auto& m : ranks_->allgather(message)) {
       MessageReader in(m);
@@ -207,10 +209,10 @@ class TreeAssembler {
   // split nodes, and the sums decide every child alike on every rank: one rank's sources
   // only (held by it), few enough to gather, or split again.
   void build_top() {
-    const auto n = static_cast<std::int32_t>(mine_.positions.size());
+    const auto n = static_cast<std::int32_t>(mine_.count);
     items_.resize(static_cast<std::size_t>(n));
     scratch_.resize(static_cast<std::size_t>(n));
-    for (std::int32_t i = 0; i < n; ++i) items_[static_cast<std::size_t>(i)] = {mine_.positions[static_cast<std::size_t>(i)], i};
+    for (std::int32_t i = 0; i < n; ++i) items_[static_cast<std::size_t>(i)] = {mine_.source(static_cast<std::size_t>(i)).position, i};
     top_.push_back(TopNode{cube_, 0, 0, Kind::internal, -1, 0, n, {}, -1});
     top_[0].child.fill(-1);
     std::vector<std::int32_t> level{0};
@@ -396,7 +398,8 @@ class TreeAssembler {
 
   SourceRecord record(std::int32_t i) const {
     const auto u = static_cast<std::size_t>(i);
-    return {mine_.positions[u], mine_.masses[u], mine_.softenings[u], mine_.places[u]};
+    const RankSources::Source s = mine_.source(u);
+    return {s.position, s.mass, s.softening, mine_.places[u]};
   }
 
   void build_own_subtrees() {
@@ -406,7 +409,8 @@ class TreeAssembler {
       for (std::int32_t k = node.first; k < node.first + node.count; ++k) {
         const std::int32_t i = items_[static_cast<std::size_t>(k)].index;
         const auto u = static_cast<std::size_t>(i);
-        in.add(mine_.positions[u], mine_.masses[u], mine_.softenings[u], name(i), i);
+        const RankSources::Source s = mine_.source(u);
+        in.add(s.position, s.mass, s.softening, name(i), i);
       }
       node.part = static_cast<std::int32_t>(own_blocks_.size());
       own_blocks_.push_back(place_block(node, std::move(in)));
@@ -819,6 +823,19 @@ TargetBatch::TargetBatch(std::span<const GravityTarget> targets) {
       any_barnes_hut = true;
     }
   }
+}
+
+RankSources RankSources::of_arrays(std::span<const Vec3> positions, std::span<const double> masses,
+                                  std::span<const double> softenings, std::span<const std::uint64_t> places,
+                                  std::span<const std::int32_t> names) {
+  if (masses.size() != positions.size() || softenings.size() != positions.size())
+    throw std::invalid_argument("RankSources: positions, masses and softenings differ in length");
+  RankSources s;
+  s.count = positions.size();
+  s.source = [positions, masses, softenings](std::size_t k) { return Source{positions[k], masses[k], softenings[k]}; };
+  s.places = places;
+  s.names = names;
+  return s;
 }
 
 TreeAcrossRanks::TreeAcrossRanks(TreeMessages& ranks, const RankSources& mine, const TreeConfig& tree_config,

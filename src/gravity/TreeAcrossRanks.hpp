@@ -1,6 +1,7 @@
 // A gravity tree over sources that several ranks hold, assembled on each rank so that its walks give one rank's tree's results bit for bit.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -17,13 +18,24 @@ using TreeMessages = Collectives;
 // One rank's sources: its share of the run's sources, in the run's order (the order one
 // rank's tree takes its sources in: within a leaf, and so in every sum, sources follow it).
 // `place` is the source's index in that order; a rank's places increase along its sources.
+// The sources are read where the run keeps them (a copy of them all would add 40 bytes a
+// source to the peak of every build and refit).
 struct RankSources {
-  std::span<const Vec3> positions;
-  std::span<const double> masses, softenings;
+  struct Source {
+    Vec3 position;
+    double mass = 0.0, softening = 0.0;
+  };
+  std::size_t count = 0;
+  std::function<Source(std::size_t)> source;  // source k, k < count
   std::span<const std::uint64_t> places;
   // The index each source has in the assembled tree, as the walks' targets name it
   // (GravityTarget::source_index); empty: its position here.
   std::span<const std::int32_t> names = {};
+
+  // Sources laid out in arrays of one length each (which must outlive the use).
+  static RankSources of_arrays(std::span<const Vec3> positions, std::span<const double> masses,
+                               std::span<const double> softenings, std::span<const std::uint64_t> places,
+                               std::span<const std::int32_t> names = {});
 };
 
 // What bounds the walks of the targets a rank passes to one call of GravityTree::accelerate
