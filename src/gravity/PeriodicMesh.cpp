@@ -168,12 +168,7 @@ PeriodicMesh::MassRange PeriodicMesh::mass_range(std::size_t count, const std::f
 }
 
 void PeriodicMesh::assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each) {
-  deposit(positions, masses, mass_range(masses.size(), [&](std::size_t p) { return masses[p]; }), for_each);
-}
-
-void PeriodicMesh::deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
-                           const ForEach& for_each) {
-  begin_deposit(range);
+  begin_deposit(mass_range(masses.size(), [&](std::size_t p) { return masses[p]; }));
   add_masses(positions, masses, for_each);
 }
 

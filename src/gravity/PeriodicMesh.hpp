@@ -92,9 +92,7 @@ class PeriodicMesh {
   };
   static MassRange mass_range(std::size_t count, const std::function<double(std::size_t)>& mass);
   void assign(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
-  void deposit(std::span<const Vec3> positions, std::span<const double> masses, const MassRange& range,
-               const ForEach& for_each);
-  // deposit() in parts: the fixed-point unit set and the mesh cleared, then masses added (in
+  // The assignment in parts: the fixed-point unit set and the mesh cleared, then masses added (in
   // any order and any parts: the sums are integers).
   void begin_deposit(const MassRange& range);
   void add_masses(std::span<const Vec3> positions, std::span<const double> masses, const ForEach& for_each);
