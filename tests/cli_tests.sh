@@ -129,7 +129,7 @@ with h5py.File('zero.hdf5', 'w') as f:
   bad_parameter)
     params good.hdf5 out "hydro:
   gamma: soft"; expect_error "hydro.gamma" ;;
-  mpi_hydro_ranks|mpi_gravity_ranks|mpi_collisionless_ranks|mpi_feedback_ranks|mpi_uneven_ranks)
+  mpi_hydro_ranks|mpi_gravity_ranks|mpi_collisionless_ranks|mpi_feedback_ranks|mpi_star_formation_ranks|mpi_uneven_ranks)
     # Across MPI ranks the run must give the snapshots of one rank, bit for bit, on 2, 3 and 4
     # ranks (oversubscribed): Sod with the timestep limiter (hydro); an Evrard collapse with
     # self-gravity; a rotating sphere with gravity, cooling, MSPH, star formation with spawning
@@ -189,6 +189,24 @@ output:
         "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
         T_END=6e-4 extra="$sphere_feedback
 $sphere_physics" ;;
+      mpi_star_formation_ranks)
+        # Star formation without feedback sites (the paper's SPH and MSPH runs) in halo mode:
+        # conversion in each owner's leaves, spawning and dissolving in turns of the owners of
+        # the particles due, the owners chosen anew at every recut, on 4 x 4 x 4 top cells.
+        "$bin" ic sphere -n 300 -o ic.hdf5 > /dev/null 2>&1 || fail "cannot write the sphere ICs"
+        T_END=6e-4 extra="star_formation:
+  enabled: true
+feedback:
+  eps_cold: 0
+  eps_hot: 0
+$sphere_physics
+space:
+  top_cells: 4
+domain:
+  repartition_imbalance: 0
+  repartition_min_steps: 0
+output:
+  statistics_every: 5" ;;
     esac
     write_params() {  # write_params OUT_DIR
       params ic.hdf5 "$1" "$extra"
@@ -222,6 +240,15 @@ $sphere_physics" ;;
       if [ "$case_name" = mpi_collisionless_ranks ]; then
         grep "^halo mode: rank 0 kept" "run$n.txt" || { cat "run$n.txt"; fail "the sphere was not run in halo mode"; }
         cmp out1/statistics.txt "out$n/statistics.txt" || fail "statistics differ from the 1-rank run's"
+      fi
+      if [ "$case_name" = mpi_star_formation_ranks ]; then
+        grep "^halo mode: rank 0 kept" "run$n.txt" || { cat "run$n.txt"; fail "the star-forming sphere was not run in halo mode"; }
+        cmp out1/statistics.txt "out$n/statistics.txt" || fail "statistics differ from the 1-rank run's"
+        line=$(grep "^star formation across ranks:" "run$n.txt") || { cat "run$n.txt"; fail "no spawning or dissolving across ranks"; }
+        echo "$n ranks: $line"
+        # Several owners' turns in one step, and dissolved gas given to another rank's particles.
+        turns=$(echo "$line" | sed 's/.* in \([0-9]*\) turns over \([0-9]*\) steps; \([0-9]*\) shares.*/\1 \2 \3/')
+        echo "$turns" | awk '{ exit !($1 > $2 && $3 > 0) }' && crossed=yes
       fi
       if [ "$case_name" = mpi_feedback_ranks ]; then
         # Each rank assembling its gravity tree from its own subtrees and the other ranks' parts
@@ -262,6 +289,28 @@ $sphere_physics" ;;
       write_params outC
       printf 'restart:\n  every_steps: 4\n' >> params.yml
       "$bin" run params.yml -q -t 1 --abandon-after-steps 250 > killed.txt 2>&1 || { cat killed.txt; fail "1-rank run to be stopped"; }
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 2 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outC/snapshot_0001.hdf5
+    fi
+    if [ "$case_name" = mpi_star_formation_ranks ]; then
+      [ "${crossed:-}" = yes ] || fail "no rank count had events of several owners in a step and shares across ranks"
+      "$python" -c "
+import h5py, sys
+with h5py.File('out1/snapshot_0001.hdf5', 'r') as f, h5py.File('ic.hdf5', 'r') as ic:
+    stars = f['PartType4/Coordinates'].shape[0] if 'PartType4' in f else 0
+    gone = ic['PartType0/Coordinates'].shape[0] - f['PartType0/Coordinates'].shape[0]
+    sys.exit(0 if stars > 0 and gone > 0 else 1)" || fail "no star particle was spawned or no gas dissolved"
+      # Stopped on 2 ranks as a kill would stop it, the run continues from its restart set on 3.
+      write_params outB
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --abandon-after-steps 1000 > killed.txt 2>&1 || { cat killed.txt; fail "2-rank run to be stopped"; }
+      grep -q "^abandoned after step 1000" killed.txt || { cat killed.txt; fail "the 2-rank run did not stop at step 1000"; }
+      mpirun_n 3 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 3 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
+      # A file written whole by one rank, stars and all, read on 2.
+      write_params outC
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      "$bin" run params.yml -q -t 1 --abandon-after-steps 1000 > killed.txt 2>&1 || { cat killed.txt; fail "1-rank run to be stopped"; }
       mpirun_n 2 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 2 ranks"; }
       "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outC/snapshot_0001.hdf5
     fi

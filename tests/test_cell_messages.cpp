@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "engine/CellMessages.hpp"
+#include "hydro/MassTransfer.hpp"
 #include "space/Space.hpp"
 
 namespace fountain {
@@ -182,12 +183,12 @@ TEST_F(TwoRanks, GhostResultsFitTheirAnnouncedSizeAndComeBackExactly) {
 
 TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep) {
   // Halo mode sends only the fields a step changes; the rest must be ones that a run without
-  // star formation never changes but by the drift (positions) or not at all, or (the
+  // feedback sites never changes but by the drift (positions) or not at all, or (the
   // potentials) that nothing reads of a held copy. With gravity the acceleration goes too,
   // which a holder's drift reads, and in periodic runs the mesh's part of it. A field added to GasParticles fails here until it
   // is placed in one list or another.
   GasParticles g;
-  std::vector<const void*> sent, unchanged{&g.id, &g.mass, &g.mass_initial, &g.mass_stars_hidden, &g.reservoir,
+  std::vector<const void*> sent, unchanged{&g.id, &g.mass_initial, &g.reservoir,
                                           &g.promoted, &g.promotion_time, &g.feedback_hot_energy, &g.x,
                                           &g.potential, &g.potential_mesh, &g.wake_bin};
   // The derived fields are changed by a step but worked out again by the holder's own drift.
@@ -206,6 +207,13 @@ TEST(HaloStepFields, EveryGasFieldIsEitherSentOrKnownNotToChangeInAHaloModeStep)
     ++mesh_fields;
   });
   EXPECT_EQ(mesh_fields, 1u);
+  // With star formation (no feedback sites) the masses conversion moves between gas and stars.
+  std::size_t star_formation_fields = 0;
+  halo_star_formation_fields(g, [&](auto& f) {
+    sent.push_back(&f);
+    ++star_formation_fields;
+  });
+  EXPECT_EQ(star_formation_fields, 2u);
   g.for_each_derived_field([&](auto& f) { derived.push_back(&f); });
   std::size_t fields = 0;
   g.for_each_field([&](auto& f) {
@@ -399,6 +407,46 @@ TEST(GasParticlesPermute, MovesWhatTheOrderMovesAndKeepsTheRest) {
       ASSERT_EQ(g.rho_msph[k], derived) << "slot " << k << " of " << keep;
     }
   }
+}
+
+// Spawning and dissolving in halo mode send the other holders only the star_formation_event
+// fields of the particles they touch: a dissolved particle's share taken in (heated, and
+// cooled by colder gas) and a parent's hidden stars given up must change nothing else.
+TEST(StarFormationEventFields, AbsorbingADissolvedParticleChangesOnlyTheEventFields) {
+  GasParticles g;
+  g.resize(3);
+  scramble(g, 11);
+  // Sane values where absorb computes: positive masses and energies, finite velocities.
+  for (std::size_t i = 0; i < 3; ++i) {
+    g.mass[i] = 1.0 + static_cast<double>(i);
+    g.mass_stars_hidden[i] = 0.25;
+    g.u[i] = g.u_full[i] = 100.0 * static_cast<double>(i + 1);
+    g.du_dt[i] = g.du_dt_cool[i] = -3.0;
+    g.v[i] = g.v_full[i] = Vec3{1.0, -2.0, 0.5} * static_cast<double>(i + 1);
+  }
+  std::vector<const void*> event;
+  for_each_field_in(g, message::star_formation_event, [&](auto& f) { event.push_back(&f); });
+  EXPECT_EQ(event.size(), 9u);
+  auto image = [&](const GasParticles& s) {
+    std::vector<std::vector<char>> out;
+    const_cast<GasParticles&>(s).for_each_field([&](auto& f) {
+      const bool sent = std::find(event.begin(), event.end(), static_cast<const void*>(&f)) != event.end();
+      const auto* bytes = reinterpret_cast<const char*>(f.data());
+      out.emplace_back(sent ? std::vector<char>{} : std::vector<char>(bytes, bytes + f.size() * sizeof(f[0])));
+    });
+    return out;
+  };
+  const auto before = image(g);
+  hydro::absorb(g, 1, 0.5, 0.1, Vec3{0.0, 1.0, 0.0}, 1000.0, 2.0);  // heated
+  hydro::absorb(g, 2, 0.5, 0.1, Vec3{0.0, 1.0, 0.0}, 1.0, 0.0);     // cooled by mixing
+  EXPECT_NE(g.u[1], 200.0);
+  EXPECT_LT(g.u[2], 300.0);
+  // The dissolved particle itself, and a parent that spawned.
+  g.mass[0] = g.mass_stars_hidden[0] = g.reservoir[0] = 0.0;
+  g.mass_stars_hidden[1] = 0.0;
+  const auto after = image(g);
+  ASSERT_EQ(after.size(), before.size());
+  for (std::size_t k = 0; k < before.size(); ++k) EXPECT_EQ(after[k], before[k]) << "gas field number " << k + 1;
 }
 
 }  // namespace

@@ -298,8 +298,11 @@ RunStart prepare_run(const ParameterFile& params, const RunOptions& options) {
       start.share = Engine::GasShare{state.gas_first, state.gas_total, std::move(state.gas_places), true,
                                      state.dm_total, std::move(state.dm_places), state.dm_first};
     }
-    // (Runs with stars, which star formation spawns, keep every particle on every rank.)
-    const std::size_t state_dm = (state.gas_shared ? state.dm_total : state.dm.size()) - state.dm.count(Species::Star);
+    // Stars, which star formation spawns, are not in the initial conditions (a share's are
+    // counted over every rank).
+    const auto stars_here = static_cast<long long>(state.dm.count(Species::Star));
+    const auto stars = static_cast<std::size_t>(state.gas_shared ? ranks->sum(stars_here) : stars_here);
+    const std::size_t state_dm = (state.gas_shared ? state.dm_total : state.dm.size()) - stars;
     if (state_dm != ic.dm_total)
       throw InputError(fmt::format("{}: restart file holds {} dark matter particles, but the initial conditions {} "
                                    "have {}",

@@ -153,6 +153,7 @@ RunSummary run_simulation(const ParameterFile& params, const RunOptions& options
   summary.mesh_planes = mesh.planes;
   summary.mesh_bytes = mesh.bytes;
   summary.tree_assembly = engine.tree_assembly();
+  summary.event_rounds = engine.event_rounds();
   summary.h_max_capped = engine.h_max_capped();
   summary.h_min_held = engine.h_min_held();
   summary.msph_decoupled = engine.msph_decoupled();

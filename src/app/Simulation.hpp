@@ -30,6 +30,7 @@ struct RunSummary {
   int mesh_cells = 0, mesh_planes = 0;  // the periodic mesh's side, and this rank's x-planes of it
   std::size_t mesh_bytes = 0;           // of the mesh, held by this rank
   Engine::TreeAssembly tree_assembly;   // the gravity trees this rank assembled across ranks
+  Engine::EventRounds event_rounds;     // star formation's spawning and dissolving across ranks
   long long h_max_capped = 0;  // particle-steps held at hydro.h_max short of neighbours
   long long h_min_held = 0;    // particle-steps held at the floor of h (hydro.h_min_ratio)
   long long msph_decoupled = 0;  // force interactions the MSPH rule dropped

@@ -281,6 +281,11 @@ int main(int argc, char** argv) {
       if (mpi.rank() == 0 && s.halo_mode)
         fmt::print(stderr, "halo mode: rank 0 kept {:.1f}% of the leaves current (mean over the recuts)\n",
                    100.0 * s.held_share);
+      if (mpi.rank() == 0 && s.event_rounds.steps > 0)
+        fmt::print(stderr,
+                   "star formation across ranks: {} particles due to spawn or dissolve, handled in {} turns over {} steps; "
+                   "{} shares of dissolved gas went to other ranks' particles\n",
+                   s.event_rounds.events, s.event_rounds.turns, s.event_rounds.steps, s.event_rounds.foreign_receivers);
     } else if (*ic) {
       request.resolution_given = resolution_opt->count() > 0;
       if (request.problem != "sphere")

@@ -98,7 +98,7 @@ namespace {
 // a step with few active particles most drifted leaves have none, and carry nothing.
 template <class Stream>
 void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                      bool ghost_results_sent, bool gravity, bool mesh) {
+                      bool ghost_results_sent, bool gravity, bool mesh, bool star_formation) {
   const Cell& cell = space.cell(c);
   thread_local std::vector<std::size_t> picks;
   picks.clear();
@@ -110,6 +110,7 @@ void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, s
     else halo_step_fields(gas, fields);
     if (gravity) halo_gravity_fields(gas, fields);
     if (mesh) halo_mesh_fields(gas, fields);
+    if (star_formation) halo_star_formation_fields(gas, fields);
   };
   if (picks.size() == cell.count) carry(FieldSlices<Stream>{s, cell.first, cell.count});
   else carry(FieldPicks<Stream>{s, picks});
@@ -117,13 +118,21 @@ void moved_gas_fields(Stream& s, const Space& space, GasParticles& gas, int c, s
 }  // namespace
 
 void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                    bool ghost_results_sent, bool gravity, bool mesh) {
-  moved_gas_fields(w, space, gas, c, moved, ghost_results_sent, gravity, mesh);
+                    bool ghost_results_sent, bool gravity, bool mesh, bool star_formation) {
+  moved_gas_fields(w, space, gas, c, moved, ghost_results_sent, gravity, mesh, star_formation);
 }
 
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                      bool ghost_results_sent, bool gravity, bool mesh) {
-  moved_gas_fields(r, space, gas, c, moved, ghost_results_sent, gravity, mesh);
+                      bool ghost_results_sent, bool gravity, bool mesh, bool star_formation) {
+  moved_gas_fields(r, space, gas, c, moved, ghost_results_sent, gravity, mesh, star_formation);
+}
+
+void pack_event_fields(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices) {
+  for_each_field_in(gas, message::star_formation_event, FieldPicks<MessageWriter>{w, indices});
+}
+
+void unpack_event_fields(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices) {
+  for_each_field_in(gas, message::star_formation_event, FieldPicks<MessageReader>{r, indices});
 }
 
 void pack_particle_range(MessageWriter& w, GasParticles& gas, std::size_t first, std::size_t count) {

@@ -85,17 +85,27 @@ template <class F>
 void halo_mesh_fields(GasParticles& g, F&& f) {
   for_each_field_in(g, message::halo_mesh, f);
 }
+template <class F>
+void halo_star_formation_fields(GasParticles& g, F&& f) {
+  for_each_field_in(g, message::halo_star_formation, f);
+}
 
 // The halo_step_fields of leaf c's gas particles flagged in `moved`, without the cell's
 // record: what its owner's tasks changed, for the ranks that hold a copy. A rank that had
 // the leaf's ghost results in this graph (its send/recv) has the ghost_fields already, as
 // they stand at the end of the graph (nothing after the ghost writes them, up to the next
 // drift): `ghost_results_sent` then leaves them out.
-// With `gravity`, the halo_gravity_fields too; with `mesh` (periodic runs), the halo_mesh_fields.
+// With `gravity`, the halo_gravity_fields too; with `mesh` (periodic runs), the
+// halo_mesh_fields; with `star_formation`, the halo_star_formation_fields.
 void pack_moved_gas(MessageWriter& w, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                    bool ghost_results_sent = false, bool gravity = false, bool mesh = false);
+                    bool ghost_results_sent = false, bool gravity = false, bool mesh = false, bool star_formation = false);
 void unpack_moved_gas(MessageReader& r, const Space& space, GasParticles& gas, int c, std::span<const char> moved,
-                      bool ghost_results_sent = false, bool gravity = false, bool mesh = false);
+                      bool ghost_results_sent = false, bool gravity = false, bool mesh = false, bool star_formation = false);
+
+// What spawning or dissolving changed of the gas particles at `indices`
+// (message::star_formation_event), for the other ranks that hold copies of them.
+void pack_event_fields(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);
+void unpack_event_fields(MessageReader& r, GasParticles& gas, std::span<const std::size_t> indices);
 
 // Every field of the particles at `indices` (in that order): a particle migrating at a recut.
 void pack_particles(MessageWriter& w, GasParticles& gas, std::span<const std::size_t> indices);

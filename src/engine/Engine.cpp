@@ -307,7 +307,8 @@ void Engine::register_tasks() {
     const auto formation = star_formation::register_tasks(tasks_, *ctx_, *sf_, *fb_);
     const auto feedback = feedback::register_tasks(tasks_, *ctx_, *fb_, formation.done);
     star_formation_done = formation.done;
-    if (ranks_) add_feedback_exchanges(formation.done, feedback.apply);
+    // In halo mode there are no sites (RunConfig::ranks_hold_shares): nothing to exchange.
+    if (ranks_ && !layout_.halo_mode()) add_feedback_exchanges(formation.done, feedback.apply);
   }
   if (ranks_ && gravity_types.mesh >= 0 && star_formation_done >= 0) {
     // The mesh's messages and the end of star formation's are collectives: every rank must
@@ -356,6 +357,9 @@ void Engine::setup_star_formation() {
   fb_->cold = {0.1 * sf_->law.rho_threshold, fb_->energy_at(2.0 * p.temperature_threshold)};
   for (auto i : gas_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
   for (auto i : dm_.id) next_id_ = std::max<std::uint64_t>(next_id_, i + 1);
+  if (ranks_ && layout_.halo_mode())  // each rank has read a share of the particles
+    for (const auto& theirs : ranks_->allgather_values(std::span<const std::uint64_t>(&next_id_, 1), "largest particle ID"))
+      next_id_ = std::max(next_id_, theirs[0]);
 }
 
 double Engine::scale_factor() const { return comoving_ ? comoving_->scale_factor(static_cast<double>(ti_current_)) : 1.0; }
@@ -474,6 +478,8 @@ IntegerTime Engine::due_end(TimeBin bin, IntegerTime ti_begin) const {
 }
 
 void Engine::remove_dissolved() {
+  // In halo mode the recut leaves them out (recut_across_ranks), as it reorders every array.
+  if (layout_.halo_mode()) return;
   std::vector<std::size_t> keep;
   keep.reserve(gas_.size());
   for (std::size_t i = 0; i < gas_.size(); ++i)
@@ -852,12 +858,14 @@ void Engine::finish_star_formation() {
   if (!sf_) return;
   star_formation::StarFormationTally step = fb_->step_tally;
   fb_->step_tally = {};
+  if (layout_.halo_mode()) gather_leaf_tallies();
   for (int c : space_.leaves()) {  // in a fixed order, so the sums are reproducible
     auto& cf = fb_->cells[static_cast<std::size_t>(c)];
     step += cf.tally;
     cf.tally = {};
   }
-  const bool changed = star_formation::spawn_and_dissolve(*ctx_, *sf_, next_id_);
+  const bool changed = layout_.halo_mode() ? spawn_and_dissolve_across_ranks()
+                                           : star_formation::spawn_and_dissolve(*ctx_, *sf_, next_id_);
   step += sf_->step_tally;
   sf_->step_tally = {};
   // New stars must join the cells and dissolved gas leave them before anything else runs;

@@ -195,6 +195,13 @@ class Engine {
   // In halo mode, the share of the leaves this rank held, averaged over the recuts (1
   // otherwise).
   double held_share() const { return layout_.held_share(); }
+  // Halo mode with star formation: spawning and dissolving across ranks since the start,
+  // alike on every rank (steps that had events, owners' turns at them, events handled, and
+  // neighbours in another rank's leaves that took a dissolved particle's share).
+  struct EventRounds {
+    long long steps = 0, turns = 0, events = 0, foreign_receivers = 0;
+  };
+  const EventRounds& event_rounds() const { return event_rounds_; }
   // The periodic mesh's side and this rank's share of it: planes and bytes (0 without one).
   struct MeshShare {
     int cells = 0, planes = 0;
@@ -319,6 +326,13 @@ class Engine {
   // the run's order.
   void hold_leaves();
   std::vector<int> leaves_in_run_order() const;  // halo mode: by run_first_
+  // Halo mode with star formation (EngineHaloStarFormation.cpp): the tallies of the leaves
+  // that formed stars, from their owners to every rank.
+  void gather_leaf_tallies();
+  // Spawning and dissolving across ranks, in the run's order as one rank's loop goes, in
+  // rounds of each owner's consecutive events; the changed particles go to every holder.
+  // Returns whether any particle was created or dissolved (alike on every rank).
+  bool spawn_and_dissolve_across_ranks();
   // Sends each rank q the particles to[q] (indices into gas_), each after what `header`
   // writes of it, in rounds of at most a bounded number of particles, so that no message
   // grows with the run. The arrivals join the arrays' end (room for all made at once):
@@ -414,6 +428,10 @@ class Engine {
   // their places (otherwise every rank read every one, in the run's order).
   bool dm_shared_ = false;
   std::vector<std::uint64_t> dm_share_places_;
+  // Halo mode: the places in the run's order of the star particles spawned here since the
+  // last recut (appended to the arrays past the owned leaves', in this order).
+  std::vector<std::uint64_t> spawned_places_;
+  EventRounds event_rounds_;
   // Halo mode before the first recut: this rank's arrays hold the share of the gas it read,
   // from the run's place share_first_ on (the file's order, in which one rank recuts them).
   bool holds_read_share_ = false;

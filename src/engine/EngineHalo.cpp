@@ -68,7 +68,8 @@ void Engine::exchange_halo() {
         if (!layout_.holds(q, c)) return;
         // send_to_ is planned only for graphs that exchange ghost results.
         const bool ghost_sent = ghost_exchange_ && std::binary_search(send_to_[uc].begin(), send_to_[uc].end(), q);
-        pack_moved_gas(w, space_, gas_, c, gas_moved_, ghost_sent, config_.gravity.enabled, ctx_->long_range != nullptr);
+        pack_moved_gas(w, space_, gas_, c, gas_moved_, ghost_sent, config_.gravity.enabled, ctx_->long_range != nullptr,
+                       sf_ != nullptr);
       },
       [&](int, int c, MessageReader& reader) {
         const auto uc = static_cast<std::size_t>(c);
@@ -76,7 +77,7 @@ void Engine::exchange_halo() {
         wake_radiated_[uc] = reader.get<double>();
         if (layout_.keeps_current(uc))
           unpack_moved_gas(reader, space_, gas_, c, gas_moved_, ghost_exchange_ && need_recv_[uc], config_.gravity.enabled,
-                           ctx_->long_range != nullptr);
+                           ctx_->long_range != nullptr, sf_ != nullptr);
       },
       "cell state");
 }

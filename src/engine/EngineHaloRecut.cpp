@@ -152,7 +152,9 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
       const Cell& cell = space_.cell(c);
       for (std::size_t k = 0; k < cell.count; ++k) {
         r.place[cell.first + k] = run_first_[static_cast<std::size_t>(c)] + k;
-        if (mine(c)) own.push_back(cell.first + k);
+        // Dissolved gas (mass 0) goes, as one rank's recut drops it: the places of those that
+        // stay keep their order, so they stand for the new ones.
+        if (mine(c) && gas_.mass[cell.first + k] > 0.0) own.push_back(cell.first + k);
       }
     }
   }
@@ -172,7 +174,11 @@ void Engine::recut_across_ranks(const std::vector<std::pair<Vec3, double>>& meas
       const Cell& cell = space_.cell(c);
       for (std::size_t k = 0; k < cell.dm_count; ++k) r.dm_place[cell.dm_first + k] = run_dm_first_[static_cast<std::size_t>(c)] + k;
     }
+    // Stars spawned since the last recut follow the owned leaves' particles in the arrays.
+    const std::size_t spawned_at = dm_.size() - spawned_places_.size();
+    std::copy(spawned_places_.begin(), spawned_places_.end(), r.dm_place.begin() + static_cast<std::ptrdiff_t>(spawned_at));
   }
+  spawned_places_.clear();
 
   // The box (a periodic one's images inside it, for every copy alike; an open one's bounds over
   // every rank's particles, exact in any order) and the top-level grid.

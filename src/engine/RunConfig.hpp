@@ -81,10 +81,12 @@ struct RunConfig {
   // h-scaled units (Mpc/h, Msun/h) divided by h (what cooling and star formation convert with).
   Units physical_units() const;
   // Across MPI ranks, whether each rank holds only its own particles and their neighbours
-  // (halo mode): runs without star formation, whose spawning and feedback change particles
-  // anywhere (gravity assembles each rank's tree from the others' parts, and the periodic mesh
-  // is fed each rank's own particles). Such a run reads its gas in shares.
-  bool ranks_hold_shares() const { return !star_formation.enabled; }
+  // (halo mode): every run but star formation with feedback sites, whose hot-neighbour
+  // searches and promotions reach particles at any distance (gravity assembles each rank's
+  // tree from the others' parts, the periodic mesh is fed each rank's own particles, and star
+  // formation without sites spawns and dissolves in rounds across ranks). Such a run reads
+  // its gas in shares.
+  bool ranks_hold_shares() const { return !star_formation.enabled || !feedback.has_sites(); }
 
   // Reads and cross-checks the parameters (the start time is run.t_begin, given or default).
   static RunConfig from(const ParameterFile& p);

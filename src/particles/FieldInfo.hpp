@@ -61,6 +61,12 @@ inline constexpr Messages migration = 1u << 7;
 // Halo mode's changed gas, fourth part, in periodic runs: the mesh's acceleration, which a
 // holder's own drift reads (the predicted velocity within a mesh step).
 inline constexpr Messages halo_mesh = 1u << 8;
+// Halo mode's changed gas, fifth part, in runs with star formation: the masses conversion
+// moves between gas and hidden stars.
+inline constexpr Messages halo_star_formation = 1u << 9;
+// What spawning or dissolving a particle between steps changes of it and of the neighbours
+// it dissolves into, sent to the other holders of their copies in halo mode.
+inline constexpr Messages star_formation_event = 1u << 10;
 }  // namespace message
 
 struct FieldInfo {

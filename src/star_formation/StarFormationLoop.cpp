@@ -35,57 +35,70 @@ void form_stars(StepContext& ctx, const StarFormationState& sf, feedback::Feedba
   }
 }
 
+bool due_to_spawn(const GasParticles& gas, const StarFormationParams& p, std::size_t i) {
+  return gas.mass[i] > 0.0 && gas.mass_stars_hidden[i] >= p.spawn_fraction * gas.mass_initial[i] * (1.0 - 1e-12);
+}
 
+bool due_to_dissolve(const GasParticles& gas, const StarFormationParams& p, std::size_t i) {
+  return gas.mass[i] > 0.0 && gas.mass[i] <= p.dissolve_fraction * gas.mass_initial[i] * (1.0 + 1e-12);
+}
 
+void spawn(StepContext& ctx, StarFormationState& sf, std::size_t i, std::uint64_t id) {
+  GasParticles& gas = ctx.gas;
+  CollisionlessParticles& stars = ctx.dm;
+  // The star starts half-kicked by gravity alone over the parent's current step: the
+  // hydro part of its opening kick is taken back (comoving: with the hydro factor).
+  const IntegerTime begin = gas.ti_begin[i];
+  const double half_hydro =
+      ctx.comoving ? ctx.comoving->hydro_kick(static_cast<double>(begin),
+                                              static_cast<double>(begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(gas.time_bin[i])))
+                   : 0.5 * ctx.timeline.step(gas.time_bin[i]);
+  const Vec3 v_full = gas.v_full[i] - gas.a_hydro[i] * half_hydro;
+  stars.push_back(id, Species::Star, gas.mass_stars_hidden[i], gas.x[i], v_full, gas.v[i], sf.time, gas.id[i]);
+  const std::size_t s = stars.size() - 1;
+  stars.a_grav[s] = gas.a_grav[i];
+  stars.a_mesh[s] = gas.a_mesh[i];
+  stars.potential_mesh[s] = gas.potential_mesh[i];
+  stars.potential[s] = gas.potential[i];
+  stars.time_bin[s] = gas.time_bin[i];
+  stars.ti_begin[s] = gas.ti_begin[i];
+  gas.mass_stars_hidden[i] = 0.0;
+  ++sf.step_tally.stars_spawned;
+}
+
+bool dissolve(StepContext& ctx, StarFormationState& sf, std::size_t i, const std::function<void(std::size_t)>& receiver) {
+  GasParticles& gas = ctx.gas;
+  StarFormationTally& tally = sf.step_tally;
+  // The reservoir is physical energy; the particles' u' take a^2 of it, and the kinetic
+  // energy their merger turns to heat is a^2 the physical one (v' = a v_pec).
+  double kinetic_to_heat = 0.0;
+  const bool shared = hydro::share_among_neighbours(ctx.space, gas, i, gas.mass[i], gas.mass_stars_hidden[i],
+                                                    ctx.expansion.code_energy(gas.reservoir[i]),
+                                                    [&](std::size_t j) {
+                                                      if (receiver) receiver(j);
+                                                      return true;
+                                                    },
+                                                    kinetic_to_heat);
+  tally.kinetic_to_heat += ctx.expansion.energy(kinetic_to_heat);
+  if (!shared) return false;
+  tally.energy_released += gas.reservoir[i];
+  gas.mass[i] = 0.0;
+  gas.mass_stars_hidden[i] = 0.0;
+  gas.reservoir[i] = 0.0;
+  ++tally.gas_dissolved;
+  return true;
+}
 
 bool spawn_and_dissolve(StepContext& ctx, StarFormationState& sf, std::uint64_t& next_id) {
   GasParticles& gas = ctx.gas;
-  CollisionlessParticles& stars = ctx.dm;
-  StarFormationTally& tally = sf.step_tally;
   const StarFormationParams& p = sf.params;
   bool changed = false;
   for (std::size_t i = 0; i < gas.size(); ++i) {
-    if (!(gas.mass[i] > 0.0)) continue;
-    const double m0 = gas.mass_initial[i];
-    if (gas.mass_stars_hidden[i] >= p.spawn_fraction * m0 * (1.0 - 1e-12)) {
-      // The star starts half-kicked by gravity alone over the parent's current step: the
-      // hydro part of its opening kick is taken back (comoving: with the hydro factor).
-      const IntegerTime begin = gas.ti_begin[i];
-      const double half_hydro =
-          ctx.comoving ? ctx.comoving->hydro_kick(static_cast<double>(begin),
-                                                  static_cast<double>(begin) + 0.5 * static_cast<double>(TimeLine::step_ticks(gas.time_bin[i])))
-                       : 0.5 * ctx.timeline.step(gas.time_bin[i]);
-      const Vec3 v_full = gas.v_full[i] - gas.a_hydro[i] * half_hydro;
-      stars.push_back(next_id++, Species::Star, gas.mass_stars_hidden[i], gas.x[i], v_full, gas.v[i], sf.time,
-                      gas.id[i]);
-      const std::size_t s = stars.size() - 1;
-      stars.a_grav[s] = gas.a_grav[i];
-      stars.a_mesh[s] = gas.a_mesh[i];
-      stars.potential_mesh[s] = gas.potential_mesh[i];
-      stars.potential[s] = gas.potential[i];
-      stars.time_bin[s] = gas.time_bin[i];
-      stars.ti_begin[s] = gas.ti_begin[i];
-      gas.mass_stars_hidden[i] = 0.0;
-      ++tally.stars_spawned;
+    if (due_to_spawn(gas, p, i)) {
+      spawn(ctx, sf, i, next_id++);
       changed = true;
     }
-    if (gas.mass[i] <= p.dissolve_fraction * m0 * (1.0 + 1e-12)) {
-      // The reservoir is physical energy; the particles' u' take a^2 of it, and the kinetic
-      // energy their merger turns to heat is a^2 the physical one (v' = a v_pec).
-      double kinetic_to_heat = 0.0;
-      const bool shared = hydro::share_among_neighbours(ctx.space, gas, i, gas.mass[i], gas.mass_stars_hidden[i],
-                                                        ctx.expansion.code_energy(gas.reservoir[i]),
-                                                        [](std::size_t) { return true; }, kinetic_to_heat);
-      tally.kinetic_to_heat += ctx.expansion.energy(kinetic_to_heat);
-      if (shared) {
-        tally.energy_released += gas.reservoir[i];
-        gas.mass[i] = 0.0;
-        gas.mass_stars_hidden[i] = 0.0;
-        gas.reservoir[i] = 0.0;
-        ++tally.gas_dissolved;
-        changed = true;
-      }
-    }
+    if (due_to_dissolve(gas, p, i) && dissolve(ctx, sf, i)) changed = true;
   }
   return changed;
 }

@@ -26,6 +26,7 @@ struct StarFormationTally {
     gas_dissolved += o.gas_dissolved; hot_without_neighbours += o.hot_without_neighbours;
     return *this;
   }
+  bool operator==(const StarFormationTally&) const = default;
   // Feedback energy injected (own + reservoir + hot), as e_sn x mass formed.
   double energy_injected() const { return energy_own + energy_reservoir + energy_hot; }
 };
