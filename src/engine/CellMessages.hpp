@@ -46,11 +46,13 @@ struct CellUpdate {
   }
 };
 
-// The gas fields that a step of a run in halo mode (no star formation, no periodic gravity)
-// changes other than by the drift (which every rank holding a copy repeats alike), and, with
-// gravity, halo_gravity_fields. The rest stay as they are between recuts in such a run, or no
-// holder reads them: identity and masses (and the star formation fields) do not change,
-// positions change by the drift alone, the potential is read only of own particles. Which field
+// The gas fields that a step of a run in halo mode changes other than by the drift (which
+// every rank holding a copy repeats alike), and, with gravity, halo_gravity_fields; in
+// periodic runs halo_mesh_fields; with star formation (no feedback sites)
+// halo_star_formation_fields. The rest stay as they are between recuts in such a run, or no
+// holder reads them: identity and initial mass do not change, nor the reservoirs and
+// promotions without feedback sites, positions change by the drift alone, the potential is
+// read only of own particles. Which field
 // travels where is a column of the table of particle fields (particles/ParticleFields.hpp;
 // a test checks that each gas field is sent, derived or known not to change).
 // They are the ghost's results (ghost_fields, which a ghost message carries whole for the
