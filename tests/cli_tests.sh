@@ -215,6 +215,20 @@ output:
         if [ "$case_name" = mpi_gravity_ranks ]; then sed -i 's/dt_max: 1e-5/dt_max: 0.001/' params.yml; fi
       fi
     }
+    restarts_across_ranks() {  # STEPS: stopped there as a kill would stop it, each run ends as the 1-rank one
+      write_params outB
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --abandon-after-steps "$1" > killed.txt 2>&1 || { cat killed.txt; fail "2-rank run to be stopped"; }
+      grep -q "^abandoned after step $1" killed.txt || { cat killed.txt; fail "the 2-rank run did not stop at step $1"; }
+      ls outB/restart_*_rank1.hdf5 > /dev/null || fail "the 2-rank run wrote no restart set"
+      mpirun_n 3 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 3 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
+      write_params outC
+      printf 'restart:\n  every_steps: 4\n' >> params.yml
+      "$bin" run params.yml -q -t 1 --abandon-after-steps "$1" > killed.txt 2>&1 || { cat killed.txt; fail "1-rank run to be stopped"; }
+      mpirun_n 2 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 2 ranks"; }
+      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outC/snapshot_0001.hdf5
+    }
     write_params out1
     "$bin" run params.yml -q -t 1 > run1.txt 2>&1 || { cat run1.txt; fail "1-rank run"; }
     for n in $ranks; do
@@ -279,18 +293,7 @@ output:
     if [ "$case_name" = mpi_collisionless_ranks ]; then
       # A 2-rank restart set (each piece its own leaves' dark matter, with their places) read
       # on 3 ranks, and a file written whole by one rank read on 2.
-      write_params outB
-      printf 'restart:\n  every_steps: 4\n' >> params.yml
-      mpirun_n 2 "$bin" run params.yml -q -t 1 --abandon-after-steps 250 > killed.txt 2>&1 || { cat killed.txt; fail "2-rank run to be stopped"; }
-      grep -q "^abandoned after step 250" killed.txt || { cat killed.txt; fail "the 2-rank run did not stop at step 250"; }
-      ls outB/restart_*_rank1.hdf5 > /dev/null || fail "the 2-rank run wrote no restart set"
-      mpirun_n 3 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 3 ranks"; }
-      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
-      write_params outC
-      printf 'restart:\n  every_steps: 4\n' >> params.yml
-      "$bin" run params.yml -q -t 1 --abandon-after-steps 250 > killed.txt 2>&1 || { cat killed.txt; fail "1-rank run to be stopped"; }
-      mpirun_n 2 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 2 ranks"; }
-      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outC/snapshot_0001.hdf5
+      restarts_across_ranks 250
     fi
     if [ "$case_name" = mpi_star_formation_ranks ]; then
       [ "${crossed:-}" = yes ] || fail "no rank count had events of several owners in a step and shares across ranks"
@@ -300,19 +303,8 @@ with h5py.File('out1/snapshot_0001.hdf5', 'r') as f, h5py.File('ic.hdf5', 'r') a
     stars = f['PartType4/Coordinates'].shape[0] if 'PartType4' in f else 0
     gone = ic['PartType0/Coordinates'].shape[0] - f['PartType0/Coordinates'].shape[0]
     sys.exit(0 if stars > 0 and gone > 0 else 1)" || fail "no star particle was spawned or no gas dissolved"
-      # Stopped on 2 ranks as a kill would stop it, the run continues from its restart set on 3.
-      write_params outB
-      printf 'restart:\n  every_steps: 4\n' >> params.yml
-      mpirun_n 2 "$bin" run params.yml -q -t 1 --abandon-after-steps 1000 > killed.txt 2>&1 || { cat killed.txt; fail "2-rank run to be stopped"; }
-      grep -q "^abandoned after step 1000" killed.txt || { cat killed.txt; fail "the 2-rank run did not stop at step 1000"; }
-      mpirun_n 3 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 3 ranks"; }
-      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outB/snapshot_0001.hdf5
-      # A file written whole by one rank, stars and all, read on 2.
-      write_params outC
-      printf 'restart:\n  every_steps: 4\n' >> params.yml
-      "$bin" run params.yml -q -t 1 --abandon-after-steps 1000 > killed.txt 2>&1 || { cat killed.txt; fail "1-rank run to be stopped"; }
-      mpirun_n 2 "$bin" run params.yml -q -t 1 --restart > restarted.txt 2>&1 || { cat restarted.txt; fail "restart on 2 ranks"; }
-      "$python" "$root/tests/compare_snapshots.py" out1/snapshot_0001.hdf5 outC/snapshot_0001.hdf5
+      # A 2-rank restart set, stars and all, read on 3 ranks, and a 1-rank file on 2.
+      restarts_across_ranks 1000
     fi
     if [ "$case_name" = mpi_gravity_ranks ]; then
       # Stopped half-way on 2 ranks as a kill would stop it, the run continues from its
