@@ -47,6 +47,9 @@ class RankExchange {
   // (ranks that disagree on the length are a logic error, named by `what`).
   template <class T>
   std::vector<std::vector<T>> allgather_values(std::span<const T> mine, const char* what) const;
+  // Every rank's `mine`, of whatever length each (a whole number of T).
+  template <class T>
+  std::vector<std::vector<T>> allgather_lists(std::span<const T> mine, const char* what) const;
   // Each rank's buffer `to[q]` goes to rank q alone (this rank's own is skipped): what every
   // rank sent to this one, indexed by sender, as views valid until the next alltoall.
   std::vector<std::span<const char>> alltoall(const std::vector<Buffer>& to) const;
@@ -105,6 +108,20 @@ std::vector<std::vector<T>> RankExchange::allgather_values(std::span<const T> mi
     if (all[r].size() != mine.size_bytes())
       throw std::logic_error(fmt::format("rank {} sent {} bytes of {}, this rank {}", r, all[r].size(), what, mine.size_bytes()));
     if (!mine.empty()) std::memcpy(out[r].data(), all[r].data(), mine.size_bytes());
+  }
+  return out;
+}
+
+template <class T>
+std::vector<std::vector<T>> RankExchange::allgather_lists(std::span<const T> mine, const char* what) const {
+  static_assert(std::is_trivially_copyable_v<T>);
+  const auto all = allgather(std::span<const char>(reinterpret_cast<const char*>(mine.data()), mine.size_bytes()));
+  std::vector<std::vector<T>> out(all.size());
+  for (std::size_t r = 0; r < all.size(); ++r) {
+    if (all[r].size() % sizeof(T) != 0)
+      throw std::logic_error(fmt::format("rank {} sent {} bytes of {}, not whole records", r, all[r].size(), what));
+    out[r].resize(all[r].size() / sizeof(T));
+    if (!out[r].empty()) std::memcpy(out[r].data(), all[r].data(), all[r].size());
   }
   return out;
 }

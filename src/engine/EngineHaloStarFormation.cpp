@@ -3,9 +3,7 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <cstring>
 #include <span>
-#include <type_traits>
 #include <stdexcept>
 #include <utility>
 #include <vector>
@@ -53,21 +51,6 @@ class HeldPlaces {
   std::vector<Run> runs_;
 };
 
-// Every rank's `mine`, of whatever length each.
-template <class T>
-std::vector<std::vector<T>> gather_lists(const domain::RankExchange& ranks, std::span<const T> mine, const char* what) {
-  static_assert(std::is_trivially_copyable_v<T>);
-  const auto all = ranks.allgather(std::span<const char>(reinterpret_cast<const char*>(mine.data()), mine.size_bytes()));
-  std::vector<std::vector<T>> out(all.size());
-  for (std::size_t r = 0; r < all.size(); ++r) {
-    if (all[r].size() % sizeof(T) != 0)
-      throw std::logic_error(fmt::format("rank {} sent {} bytes of {}, not whole records", r, all[r].size(), what));
-    out[r].resize(all[r].size() / sizeof(T));
-    if (!out[r].empty()) std::memcpy(out[r].data(), all[r].data(), all[r].size());
-  }
-  return out;
-}
-
 // A particle due to spawn or dissolve, by place, and the rank that owns it.
 struct Event {
   std::uint64_t place;
@@ -88,7 +71,7 @@ void Engine::gather_leaf_tallies() {
     const auto& t = fb_->cells[static_cast<std::size_t>(c)].tally;
     if (mine(c) && t != star_formation::StarFormationTally{}) mine_formed.push_back({c, t});
   }
-  const auto all = gather_lists(*ranks_, std::span<const LeafTally>(mine_formed), "star formation tallies");
+  const auto all = ranks_->allgather_lists(std::span<const LeafTally>(mine_formed), "star formation tallies");
   for (std::size_t q = 0; q < all.size(); ++q)
     for (const LeafTally& t : all[q]) {
       const auto c = static_cast<int>(t.leaf);
@@ -124,7 +107,7 @@ bool Engine::spawn_and_dissolve_across_ranks() {
   }
   std::vector<Event> events;
   {
-    const auto all = gather_lists(*ranks_, std::span<const std::uint64_t>(due), "particles due to spawn or dissolve");
+    const auto all = ranks_->allgather_lists(std::span<const std::uint64_t>(due), "particles due to spawn or dissolve");
     for (std::size_t q = 0; q < all.size(); ++q)
       for (std::uint64_t place : all[q]) events.push_back({place, static_cast<int>(q)});
   }
